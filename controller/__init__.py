@@ -1,0 +1,1 @@
+"""Controller side of the G1 stack: policies, command inputs, run loop, CLI."""

@@ -1,0 +1,131 @@
+"""g1ctl: command line of the G1 controller stack.
+
+Usage:
+    g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--duration S] [--seed N]
+              [--video runs/demo.mp4] [--report runs/report.json] [--realtime] [--viewer]
+              [--input scripted|keyboard|gamepad] [--progress]
+    g1ctl assets fetch [--assets-dir DIR]
+    g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
+    g1ctl scenarios            (list the shipped scenarios and policies)
+
+Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
+A mistake in the input ends with one line on stderr and exit status 2; a fault during
+a run with exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from hw.errors import G1Error
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="g1ctl", description="Unitree G1 controller stack")
+    parser.add_argument("--assets-dir", default=None, help="verified local copies of the assets (also G1CTL_ASSETS_DIR)")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    sim = sub.add_parser("sim", help="run a command scenario on the simulated G1")
+    sim.add_argument("--scenario", default="walk_turn_stop", help="shipped scenario name or path to a scenario YAML")
+    sim.add_argument("--policy", default="fastsac", help="policy preset name or path to a policy YAML")
+    sim.add_argument("--duration", type=float, default=None, help="seconds of simulated time (default: the scenario's)")
+    sim.add_argument("--seed", type=int, default=0)
+    sim.add_argument("--input", default="scripted", choices=("scripted", "keyboard", "gamepad"))
+    sim.add_argument("--video", type=Path, default=None, help="write an .mp4 or .gif of the run")
+    sim.add_argument("--video-fps", type=int, default=20)
+    sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
+    sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
+    sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
+    sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
+    sim.add_argument("--progress", action="store_true", help="show a progress bar")
+
+    assets = sub.add_parser("assets", help="manage the G1 model and policy files")
+    assets_sub = assets.add_subparsers(dest="assets_command", required=True)
+    assets_sub.add_parser("fetch", help="download and verify the assets (no work when already there)")
+    assets_sub.add_parser("path", help="print where the assets are")
+
+    bench = sub.add_parser("bench", help="benchmarks (reports in JSON)")
+    bench_sub = bench.add_subparsers(dest="bench_command", required=True)
+    loop = bench_sub.add_parser("loop", help="stack real-time factor against a minimal inline loop")
+    loop.add_argument("--report", type=Path, default=None)
+    loop.add_argument("--policy", default="fastsac")
+    loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
+    loop.add_argument("--duration", type=float, default=20.0)
+
+    sub.add_parser("scenarios", help="list shipped scenarios and policy presets")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _build_parser().parse_args(argv)
+    try:
+        return _dispatch(args)
+    except G1Error as exc:
+        print(f"g1ctl: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("g1ctl: interrupted", file=sys.stderr)
+        return 130
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    if args.command == "sim":
+        return _sim(args)
+    if args.command == "assets":
+        from controller.assets import ensure_assets  # noqa: PLC0415
+
+        found = ensure_assets(args.assets_dir)
+        print(found.root)
+        return 0
+    if args.command == "bench":
+        from controller.bench import run_loop_bench  # noqa: PLC0415
+
+        report = run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir)
+        _emit(report, args.report)
+        return 0
+    if args.command == "scenarios":
+        from controller.inputs.scripted import available_scenarios  # noqa: PLC0415
+        from controller.policies import available_policies  # noqa: PLC0415
+
+        print("scenarios:", ", ".join(available_scenarios()))
+        print("policies: ", ", ".join(available_policies()))
+        return 0
+    raise AssertionError(args.command)
+
+
+def _sim(args: argparse.Namespace) -> int:
+    from controller.sim_session import SimRunConfig, run  # noqa: PLC0415 - imports MuJoCo
+
+    cfg = SimRunConfig(
+        scenario=args.scenario, policy=args.policy, duration=args.duration, seed=args.seed, input=args.input,
+        video=args.video, video_fps=args.video_fps, report=args.report, plot=args.plot, realtime=args.realtime,
+        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir,
+    )  # fmt: skip
+    report = run(cfg)
+    summary = {k: report[k] for k in ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")}
+    print(json.dumps(summary))
+    for key in ("video", "plot"):
+        if key in report:
+            print(f"{key}: {report[key]}")
+    if args.report:
+        print(f"report: {args.report}")
+    if report["final_mode"] == "damp" and report["damp_reason"].startswith("policy fault"):
+        print(f"g1ctl: run ended damped: {report['damp_reason']}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _emit(report: dict[str, object], path: Path | None) -> None:
+    text = json.dumps(report, indent=2)
+    print(text)
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text + "\n")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

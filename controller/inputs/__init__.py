@@ -1,0 +1,1 @@
+"""Command inputs: scripted timelines, the terminal keyboard, a Linux gamepad."""

@@ -1,0 +1,36 @@
+"""Policy presets by name: `configs/policies/NAME.yaml`, or a path to such a file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from controller.assets import Assets
+from controller.policy import OnnxPolicy, PolicyConfig
+from controller.yamlconfig import load_config
+from hw.errors import ConfigError
+
+POLICY_DIR = Path(__file__).resolve().parent.parent / "configs" / "policies"
+
+
+def available_policies() -> list[str]:
+    return sorted(p.stem for p in POLICY_DIR.glob("*.yaml"))
+
+
+def policy_config_path(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") and path.is_file():
+        return path
+    path = POLICY_DIR / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError(f"unknown policy '{name_or_path}' (available: {', '.join(available_policies())}, or a path to a policy .yaml)")
+    return path
+
+
+def load_policy(name_or_path: str, assets: Assets, robot_joint_names: tuple[str, ...]) -> OnnxPolicy:
+    """Load a policy preset and its ONNX file, checked against the robot's joints."""
+    cfg_path = policy_config_path(name_or_path)
+    cfg = load_config(PolicyConfig, cfg_path)
+    onnx_path = assets.policy(cfg.onnx)
+    if not Path(cfg.onnx).is_absolute() and (cfg_path.parent / cfg.onnx).is_file():
+        onnx_path = cfg_path.parent / cfg.onnx
+    return OnnxPolicy(onnx_path, cfg, robot_joint_names, source=str(cfg_path))

@@ -1,0 +1,51 @@
+"""Run-mode state machine between the command input and the policy.
+
+RUN: the policy tracks the input's velocity. STAND: the stop button was pressed, the
+policy holds a zero command. DAMP: emergency stop, a dead input or a policy fault;
+every joint is damped and the mode latches until the start button is pressed on a live
+input with no policy fault.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+from controller.inputs.base import ZERO, CommandSample, VelocityCommand
+
+
+class Mode(enum.Enum):
+    RUN = "run"
+    STAND = "stand"
+    DAMP = "damp"
+
+
+@dataclass
+class Supervisor:
+    mode: Mode = Mode.RUN
+    damp_reason: str = ""
+    estops: int = 0
+    input_losses: int = 0
+
+    def update(self, sample: CommandSample, policy_fault: str | None) -> VelocityCommand:
+        """Advance the mode on this input sample; returns the velocity the policy should track."""
+        if policy_fault is not None:
+            self._damp(f"policy fault: {policy_fault}")
+        elif sample.buttons.estop:
+            if self.mode is not Mode.DAMP:
+                self.estops += 1
+            self._damp("emergency stop pressed")
+        elif not sample.alive:
+            if self.mode is not Mode.DAMP:
+                self.input_losses += 1
+            self._damp("command input lost (stale or unplugged)")
+        elif sample.buttons.start:
+            self.mode, self.damp_reason = Mode.RUN, ""
+        elif sample.buttons.stop and self.mode is Mode.RUN:
+            self.mode = Mode.STAND
+        return sample.velocity if self.mode is Mode.RUN else ZERO
+
+    def _damp(self, reason: str) -> None:
+        if self.mode is not Mode.DAMP:
+            self.damp_reason = reason
+        self.mode = Mode.DAMP

@@ -1,0 +1,28 @@
+"""One exception tree for the whole stack.
+
+Every error a user can cause or meet derives from `G1Error`; subclasses also derive
+from the matching built-in so callers can catch what they expect (`FileNotFoundError`,
+`ValueError`, `ConnectionError`). Messages say what is wrong and what to check.
+"""
+
+from __future__ import annotations
+
+
+class G1Error(Exception):
+    """Root of every error raised by the stack."""
+
+
+class ConfigError(G1Error, ValueError):
+    """A YAML file or a config value is invalid (unknown key, wrong shape, bad value)."""
+
+
+class AssetError(G1Error, FileNotFoundError):
+    """A model or policy file is missing, corrupt or cannot be fetched."""
+
+
+class PolicyError(G1Error, ValueError):
+    """An ONNX policy does not match its configuration (inputs, outputs, joint names)."""
+
+
+class InputDeviceError(G1Error, ConnectionError):
+    """A command input device (gamepad, keyboard) is absent or stopped answering."""

@@ -1,0 +1,1 @@
+"""MuJoCo world of the Unitree G1: scene, simulated robot, rendering."""
