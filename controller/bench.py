@@ -47,7 +47,7 @@ def minimal_loop_rtf(policy_name: str, duration: float, assets_dir: str | None) 
     phase = np.array([math.pi, math.pi])
     dphase = 2 * math.pi / (policy.cfg.rate_hz * policy.cfg.gait.period)
     standing = True
-    n_ticks = int(round(duration * policy.cfg.rate_hz))
+    n_ticks = round(duration * policy.cfg.rate_hz)
     start = time.perf_counter()
     for k in range(n_ticks):
         cmd = cmds[np.searchsorted(times, k / policy.cfg.rate_hz, side="right") - 1]

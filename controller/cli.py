@@ -106,7 +106,10 @@ def _sim(args: argparse.Namespace) -> int:
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir,
     )  # fmt: skip
     report = run(cfg)
-    summary = {k: report[k] for k in ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")}
+    summary = {
+        k: report[k]
+        for k in ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
+    }
     print(json.dumps(summary))
     for key in ("video", "plot"):
         if key in report:

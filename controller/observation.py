@@ -59,47 +59,65 @@ class ObservationLayout:
         """Every term must be known and have its expected dimension."""
         for term in self.terms:
             if term.name not in KNOWN_TERMS:
-                raise ConfigError(
-                    f"{source}: unknown observation term '{term.name}' (known: {', '.join(sorted(KNOWN_TERMS))})"
-                )
+                raise ConfigError(f"{source}: unknown observation term '{term.name}' (known: {', '.join(sorted(KNOWN_TERMS))})")
             expected = KNOWN_TERMS[term.name] or num_joints
             if term.dim != expected:
                 raise ConfigError(f"{source}: observation term '{term.name}' has dim {term.dim}, expected {expected}")
 
 
 class ObservationBuilder:
-    """Concatenates scaled terms with per-term history into one float32 row."""
+    """Concatenates scaled terms with per-term history into one float32 row.
+
+    Callers either pass a mapping of term values to `build`, or, on the hot path, write
+    raw (unscaled) values straight into `raw[slot(name)]` and call `commit()`: one
+    vector multiply then scales every term at once.
+    """
 
     def __init__(self, layout: ObservationLayout) -> None:
         self.layout = layout
-        self._out = np.zeros((1, layout.size), dtype=np.float32)
-        h_len = layout.history_length
-        self._history = [np.zeros((h_len, t.dim), dtype=np.float32) for t in layout.terms]
-        self._slots: list[tuple[str, slice, np.float32]] = []
+        width = sum(t.dim for t in layout.terms)
+        self.raw = np.zeros(width)
+        self._scales = np.concatenate([np.full(t.dim, t.scale) for t in layout.terms]) if layout.terms else np.zeros(0)
+        self._slots: dict[str, slice] = {}
         col = 0
         for term in layout.terms:
-            width = term.dim * h_len
-            self._slots.append((term.name, slice(col, col + width), np.float32(term.scale)))
-            col += width
+            self._slots[term.name] = slice(col, col + term.dim)
+            col += term.dim
+        self._current = np.zeros(width, dtype=np.float32)
+        self._history = np.zeros((layout.history_length, width), dtype=np.float32)
+        self._out = np.zeros((1, layout.size), dtype=np.float32)
+        # Output order: for each term, its history oldest first (holosoma's per-term flattening).
+        self._gather = np.concatenate(
+            [
+                (np.arange(layout.history_length)[:, None] * width + np.arange(s.start, s.stop)[None, :]).reshape(-1)
+                for s in self._slots.values()
+            ]
+        ) if layout.terms else np.zeros(0, dtype=int)  # fmt: skip
+
+    def slot(self, name: str) -> slice:
+        return self._slots[name]
 
     def reset(self) -> None:
-        for h in self._history:
-            h[:] = 0.0
+        self.raw[:] = 0.0
+        self._history[:] = 0.0
         self._out[:] = 0.0
 
     def build(self, values: Mapping[str, FloatArray]) -> np.ndarray:
-        """Append this step's term values to the history and return the policy input [1, size].
+        """Set every term from `values` and return the policy input [1, size]."""
+        for name, cols in self._slots.items():
+            self.raw[cols] = np.asarray(values[name]).reshape(-1)
+        return self.commit()
+
+    def commit(self) -> np.ndarray:
+        """Scale the raw values, append them to the history and return the policy input [1, size].
 
         Before `history_length` steps have passed the older slots hold zeros, as in
         holosoma's inference runner the policies were exported with.
         """
-        row = self._out[0]
         if self.layout.history_length == 1:
-            for name, cols, scale in self._slots:
-                np.multiply(values[name], scale, out=row[cols], casting="unsafe")
+            np.multiply(self.raw, self._scales, out=self._out[0], casting="unsafe")
             return self._out
-        for (name, cols, scale), hist in zip(self._slots, self._history, strict=True):
-            hist[:-1] = hist[1:]
-            np.multiply(values[name], scale, out=hist[-1], casting="unsafe")
-            row[cols] = hist.reshape(-1)
+        self._history[:-1] = self._history[1:]
+        np.multiply(self.raw, self._scales, out=self._history[-1], casting="unsafe")
+        np.take(self._history.reshape(-1), self._gather, out=self._out[0])
         return self._out

@@ -7,10 +7,10 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from controller.metrics import TrackingMetrics  # noqa: E402
+from controller.metrics import TrackingMetrics
 
 
 def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:

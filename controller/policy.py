@@ -136,7 +136,7 @@ class OnnxPolicy:
         self.command_limits = _command_limits(meta)
         self.obs = ObservationBuilder(cfg.observation)
         self.gait = GaitClock(cfg.gait, cfg.rate_hz)
-        self._terms = {t.name for t in cfg.observation.terms}
+        self._slot = {t.name: self.obs.slot(t.name) for t in cfg.observation.terms}
         self._zeros = np.zeros(n)
         self._damp_kd = np.full(n, cfg.damping_kd)
         self.nonfinite_events = 0
@@ -150,7 +150,9 @@ class OnnxPolicy:
         if cfg.input_name not in inputs:
             raise PolicyError(f"{name}: no input '{cfg.input_name}' (inputs: {', '.join(inputs)}); fix 'input_name' in the policy config")
         if cfg.output_name not in outputs:
-            raise PolicyError(f"{name}: no output '{cfg.output_name}' (outputs: {', '.join(outputs)}); fix 'output_name' in the policy config")
+            raise PolicyError(
+                f"{name}: no output '{cfg.output_name}' (outputs: {', '.join(outputs)}); fix 'output_name' in the policy config"
+            )
         in_dim = inputs[cfg.input_name][-1]
         if isinstance(in_dim, int) and in_dim != cfg.observation.size:
             raise PolicyError(
@@ -164,7 +166,9 @@ class OnnxPolicy:
         values = meta.get(key)
         if values is None:
             if override is None or set(override) != set(self.joint_names):
-                raise PolicyError(f"{self.path.name}: no '{key}' in metadata; give all {len(self.joint_names)} joints under '{key}' in {source}")
+                raise PolicyError(
+                    f"{self.path.name}: no '{key}' in metadata; give all {len(self.joint_names)} joints under '{key}' in {source}"
+                )
             return np.array([override[j] for j in self.joint_names])
         gains = np.asarray(values, float)
         if gains.shape != (len(self.joint_names),):
@@ -184,29 +188,29 @@ class OnnxPolicy:
         self.latched_fault = None
 
     def observe(self, state: RobotState, command: VelocityCommand) -> np.ndarray:
-        """Assemble the policy input for this tick."""
-        idx = self.robot_index
-        values: dict[str, FloatArray] = {
-            "dof_pos": state.joint_pos[idx] - self.default_pos,
-            "dof_vel": state.joint_vel[idx],
-            "actions": self.last_action,
-        }
-        t = self._terms
-        if "base_ang_vel" in t:
-            values["base_ang_vel"] = state.base_ang_vel
-        if "projected_gravity" in t:
-            values["projected_gravity"] = quat_rotate_inverse(state.base_quat, GRAVITY)
-        if "base_lin_vel" in t:
-            values["base_lin_vel"] = quat_rotate_inverse(state.base_quat, state.base_lin_vel)
-        if "command_lin_vel" in t:
-            values["command_lin_vel"] = np.array([command.vx, command.vy])
-        if "command_ang_vel" in t:
-            values["command_ang_vel"] = np.array([command.yaw_rate])
-        if "sin_phase" in t:
-            values["sin_phase"] = np.sin(self.gait.phase)
-        if "cos_phase" in t:
-            values["cos_phase"] = np.cos(self.gait.phase)
-        return self.obs.build(values)
+        """Assemble the policy input for this tick (raw values into their slots, then one scaling)."""
+        raw, slot, idx = self.obs.raw, self._slot, self.robot_index
+        raw[slot["dof_pos"]] = state.joint_pos[idx]
+        raw[slot["dof_pos"]] -= self.default_pos
+        raw[slot["dof_vel"]] = state.joint_vel[idx]
+        raw[slot["actions"]] = self.last_action
+        if "base_ang_vel" in slot:
+            raw[slot["base_ang_vel"]] = state.base_ang_vel
+        if "projected_gravity" in slot:
+            raw[slot["projected_gravity"]] = quat_rotate_inverse(state.base_quat, GRAVITY)
+        if "base_lin_vel" in slot:
+            raw[slot["base_lin_vel"]] = quat_rotate_inverse(state.base_quat, state.base_lin_vel)
+        if "command_lin_vel" in slot:
+            raw[slot["command_lin_vel"]] = (command.vx, command.vy)
+        if "command_ang_vel" in slot:
+            raw[slot["command_ang_vel"]] = command.yaw_rate
+        if "sin_phase" in slot or "cos_phase" in slot:
+            p0, p1 = self.gait.phase.tolist()
+            if "sin_phase" in slot:
+                raw[slot["sin_phase"]] = (math.sin(p0), math.sin(p1))
+            if "cos_phase" in slot:
+                raw[slot["cos_phase"]] = (math.cos(p0), math.cos(p1))
+        return self.obs.commit()
 
     def infer(self, obs: np.ndarray) -> FloatArray:
         out = self._session.run([self.cfg.output_name], {self.cfg.input_name: obs})[0]

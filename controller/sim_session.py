@@ -93,7 +93,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
 
             recorder = stack.enter_context(VideoRecorder(robot.model, cfg.video, fps=cfg.video_fps))
         viewer = _open_viewer(robot, stack) if cfg.viewer else None
-        total = int(round(duration * policy.cfg.rate_hz)) if duration else None
+        total = round(duration * policy.cfg.rate_hz) if duration else None
         bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
         wall_start = time.perf_counter()
         sim_start = robot.time

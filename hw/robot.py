@@ -36,7 +36,7 @@ class RobotInterface(abc.ABC):
     def damp(self) -> None:
         """Put every joint into damping (kp 0): the safe state."""
 
-    def _shutdown(self) -> None:
+    def _shutdown(self) -> None:  # noqa: B027 - optional hook, most backends hold nothing to release
         """Release backend resources; called once by `close()` after damping."""
 
     def close(self) -> None:
@@ -51,9 +51,7 @@ class RobotInterface(abc.ABC):
     def __enter__(self) -> RobotInterface:
         return self
 
-    def __exit__(
-        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         self.close()
 
     def __del__(self) -> None:

@@ -1,18 +1,14 @@
 """Offscreen rendering of the simulated G1 to MP4/GIF video and PNG pictures.
 
-Headless machines render with EGL (`MUJOCO_GL=egl`, set here when no display exists).
+Headless machines render with EGL (`MUJOCO_GL=egl`, set by `sim/__init__.py` when no display exists).
 Shadows, reflections and the skybox are off: on a CPU-only machine they cost about
 four times the frame time for little a person watching a gait needs.
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from types import TracebackType
-
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-    os.environ["MUJOCO_GL"] = "egl"
 
 import imageio.v2 as imageio
 import mujoco
@@ -48,6 +44,7 @@ class VideoRecorder:
             self._writer = imageio.get_writer(str(path), fps=fps, codec="libx264", quality=7, macro_block_size=8)
         else:
             self._writer = imageio.get_writer(str(path), mode="I", duration=1000.0 / fps, loop=0)
+        self._open = True
         self.frames = 0
         self.last_frame: np.ndarray | None = None
 
@@ -63,9 +60,9 @@ class VideoRecorder:
         self._next_t += 1.0 / self.fps
 
     def close(self) -> None:
-        if self._writer is not None:
+        if self._open:
+            self._open = False
             self._writer.close()
-            self._writer = None
             self._renderer.close()
 
     def __enter__(self) -> VideoRecorder:

@@ -62,7 +62,9 @@ class SimRobot(RobotInterface):
         self.data.qpos[3:7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
         self.data.qpos[self._qpos_adr] = q
         mujoco.mj_forward(self.model, self.data)
-        self.write(JointCommand(q=q, dq=np.zeros_like(q), kp=np.zeros_like(q), kd=np.full_like(q, self._damping_kd), tau_ff=np.zeros_like(q)))
+        self.write(
+            JointCommand(q=q, dq=np.zeros_like(q), kp=np.zeros_like(q), kd=np.full_like(q, self._damping_kd), tau_ff=np.zeros_like(q))
+        )
 
     def read(self) -> RobotState:
         d = self.data

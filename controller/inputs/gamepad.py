@@ -127,7 +127,9 @@ def find_gamepad(evdev: Any) -> Any:
         if EV_ABS in caps and EV_KEY in caps:
             return device
         device.close()
-    raise InputDeviceError("no gamepad found under /dev/input; plug one in (and check you may read /dev/input/event*), or use --input keyboard")
+    raise InputDeviceError(
+        "no gamepad found under /dev/input; plug one in (and check you may read /dev/input/event*), or use --input keyboard"
+    )
 
 
 class GamepadSource(CommandSource):
@@ -141,7 +143,8 @@ class GamepadSource(CommandSource):
         except ImportError as exc:
             raise InputDeviceError("the gamepad input needs the 'evdev' package (Linux); install it with 'pip install evdev'") from exc
         self._device = evdev.InputDevice(device_path) if device_path else find_gamepad(evdev)
-        ranges = {code: AxisRange(info.min, info.max) for code, info in self._device.capabilities().get(EV_ABS, []) if hasattr(info, "min")}
+        abs_caps: Any = self._device.capabilities(absinfo=True).get(EV_ABS, [])
+        ranges = {code: AxisRange(info.min, info.max) for code, info in abs_caps}
         self._decoder = GamepadDecoder(ranges)
         self._cfg = cfg
         self._limits = limits

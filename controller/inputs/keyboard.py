@@ -12,7 +12,7 @@ import sys
 import termios
 import threading
 import tty
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
 from hw.errors import InputDeviceError
@@ -22,8 +22,8 @@ HELP = "keys: W/S fwd/back  A/D left/right  Q/E turn  space zero  Enter start  X
 
 @dataclass(frozen=True)
 class KeyboardState:
-    velocity: VelocityCommand = VelocityCommand()
-    buttons: Buttons = Buttons()
+    velocity: VelocityCommand = field(default_factory=VelocityCommand)
+    buttons: Buttons = field(default_factory=Buttons)
 
 
 def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float = 0.1) -> KeyboardState:
@@ -52,11 +52,7 @@ class KeyboardSource(CommandSource):
     _needs_close = True
 
     def __init__(self, limits: CommandLimits, step: float = 0.1, stream: object | None = None) -> None:
-        self._stream = stream or sys.stdin
-        fileno = getattr(self._stream, "fileno", None)
-        if fileno is None or not os.isatty(fileno()):
-            raise InputDeviceError("the keyboard input needs an interactive terminal; use --input scripted or run it in a terminal")
-        self._fd = fileno()
+        self._fd = _tty_fd(stream or sys.stdin)
         self._limits = limits
         self._step = step
         self._state = KeyboardState()
@@ -89,3 +85,13 @@ class KeyboardSource(CommandSource):
         self._thread.join(timeout=0.5)
         termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
         super().close()
+
+
+def _tty_fd(stream: object) -> int:
+    try:
+        fd = stream.fileno()  # type: ignore[attr-defined]
+    except (AttributeError, OSError, ValueError):
+        fd = -1
+    if fd < 0 or not os.isatty(fd):
+        raise InputDeviceError("the keyboard input needs an interactive terminal; use --input scripted or run it in a terminal")
+    return int(fd)

@@ -68,7 +68,9 @@ def load_scenario(name_or_path: str) -> Scenario:
     if not (path.suffix in (".yaml", ".yml") and path.is_file()):
         path = SCENARIO_DIR / f"{name_or_path}.yaml"
         if not path.is_file():
-            raise ConfigError(f"unknown scenario '{name_or_path}' (available: {', '.join(available_scenarios())}, or a path to a .yaml file)")
+            raise ConfigError(
+                f"unknown scenario '{name_or_path}' (available: {', '.join(available_scenarios())}, or a path to a .yaml file)"
+            )
     return load_config(Scenario, path)
 
 
@@ -103,9 +105,7 @@ class ScriptedSource(CommandSource):
     def __init__(self, steps: tuple[ScenarioStep, ...], limits: CommandLimits | None = None) -> None:
         self.steps = steps
         self._times = [s.t for s in steps]
-        self._commands = [
-            (limits.clamp(c) if limits else c) for c in (VelocityCommand(s.vx, s.vy, s.yaw_rate) for s in steps)
-        ]
+        self._commands = [(limits.clamp(c) if limits else c) for c in (VelocityCommand(s.vx, s.vy, s.yaw_rate) for s in steps)]
 
     def step_index(self, now: float) -> int:
         return max(bisect.bisect_right(self._times, now + 1e-9) - 1, 0)
