@@ -2,7 +2,7 @@
 
 Usage:
     g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--duration S] [--seed N]
-              [--video runs/demo.mp4] [--report runs/report.json] [--realtime] [--viewer]
+              [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
               [--input scripted|keyboard|gamepad] [--progress]
     g1ctl assets fetch [--assets-dir DIR]
     g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
@@ -37,6 +37,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--input", default="scripted", choices=("scripted", "keyboard", "gamepad"))
     sim.add_argument("--video", type=Path, default=None, help="write an .mp4 or .gif of the run")
     sim.add_argument("--video-fps", type=int, default=20)
+    sim.add_argument("--picture", type=Path, default=None, help="write a .png of the final frame")
     sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
@@ -102,7 +103,7 @@ def _sim(args: argparse.Namespace) -> int:
 
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, duration=args.duration, seed=args.seed, input=args.input,
-        video=args.video, video_fps=args.video_fps, report=args.report, plot=args.plot, realtime=args.realtime,
+        video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir,
     )  # fmt: skip
     report = run(cfg)
@@ -111,7 +112,7 @@ def _sim(args: argparse.Namespace) -> int:
         for k in ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
     }
     print(json.dumps(summary))
-    for key in ("video", "plot"):
+    for key in ("video", "picture", "plot"):
         if key in report:
             print(f"{key}: {report[key]}")
     if args.report:

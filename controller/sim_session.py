@@ -45,6 +45,7 @@ class SimRunConfig:
     progress: bool = False
     assets_dir: str | None = None
     video_fps: int = 20
+    picture: Path | None = None  # PNG of the final frame
 
 
 def make_source(cfg: SimRunConfig, limits: CommandLimits, duration: float) -> tuple[CommandSource, Any]:
@@ -125,6 +126,10 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
         wall = time.perf_counter() - wall_start
         sim_seconds = robot.time - sim_start
         final_pos = robot.read().base_pos
+        if cfg.picture is not None:
+            from sim.render import render_picture  # noqa: PLC0415 - rendering is optional
+
+            render_picture(robot.model, robot.data, cfg.picture)
 
     report: dict[str, Any] = {
         "scenario": cfg.scenario if scenario else cfg.input,
@@ -149,6 +154,8 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     }
     if recorder is not None:
         report["video"] = str(cfg.video)
+    if cfg.picture is not None:
+        report["picture"] = str(cfg.picture)
     plot_path = cfg.plot or (cfg.report.with_suffix(".png") if cfg.report else None)
     if plot_path is not None and metrics.times:
         plot_tracking(metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured")

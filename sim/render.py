@@ -21,20 +21,35 @@ class RenderError(G1Error, RuntimeError):
     """Offscreen rendering is not available on this machine."""
 
 
+def _make_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    try:
+        renderer = mujoco.Renderer(model, height=height, width=width)
+    except Exception as exc:  # EGL/OSMesa failures come as various exception types
+        raise RenderError(f"cannot render offscreen ({exc}); set MUJOCO_GL=egl or osmesa, or drop --video/--picture") from exc
+    flags = renderer.scene.flags
+    flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+    flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+    flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = 0
+    return renderer
+
+
+def render_picture(model: mujoco.MjModel, data: mujoco.MjData, path: Path, width: int = 640, height: int = 480) -> None:
+    """Write a PNG of the current state seen from the tracking camera."""
+    renderer = _make_renderer(model, width, height)
+    try:
+        renderer.update_scene(data, camera=model.camera("track").id)
+        save_png(renderer.render(), path)
+    finally:
+        renderer.close()
+
+
 class VideoRecorder:
     """Captures frames from a tracking camera at `fps` of simulated time and writes them on close."""
 
     def __init__(self, model: mujoco.MjModel, path: Path, fps: int = 25, width: int = 640, height: int = 480) -> None:
         if path.suffix.lower() not in (".mp4", ".gif"):
             raise RenderError(f"video path must end in .mp4 or .gif, got {path.name}")
-        try:
-            self._renderer = mujoco.Renderer(model, height=height, width=width)
-        except Exception as exc:  # EGL/OSMesa failures come as various exception types
-            raise RenderError(f"cannot render offscreen ({exc}); set MUJOCO_GL=egl or osmesa, or drop --video") from exc
-        flags = self._renderer.scene.flags
-        flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
-        flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-        flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = 0
+        self._renderer = _make_renderer(model, width, height)
         self.path = path
         self.fps = fps
         self._next_t = 0.0
@@ -46,7 +61,6 @@ class VideoRecorder:
             self._writer = imageio.get_writer(str(path), mode="I", duration=1000.0 / fps, loop=0)
         self._open = True
         self.frames = 0
-        self.last_frame: np.ndarray | None = None
 
     def maybe_capture(self, data: mujoco.MjData) -> None:
         """Capture a frame when simulated time has reached the next frame time."""
@@ -55,7 +69,6 @@ class VideoRecorder:
         self._renderer.update_scene(data, camera=self._camera)
         frame = self._renderer.render()
         self._writer.append_data(frame)
-        self.last_frame = frame
         self.frames += 1
         self._next_t += 1.0 / self.fps
 

@@ -34,11 +34,29 @@ def test_five_seconds_of_walking(tmp_path: Path) -> None:
     assert Path(report["plot"]).is_file() and Path(report["plot"]).stat().st_size > 10_000
 
 
-def test_video_is_written(tmp_path: Path) -> None:
-    video = tmp_path / "walk.gif"
-    result = g1ctl("sim", "--duration", "0.5", "--video", str(video), "--video-fps", "10")
+def test_video_and_picture_are_written(tmp_path: Path) -> None:
+    video, picture = tmp_path / "walk.gif", tmp_path / "last.png"
+    result = g1ctl("sim", "--duration", "0.5", "--video", str(video), "--video-fps", "10", "--picture", str(picture))
     assert result.returncode == 0, result.stderr
     assert video.stat().st_size > 10_000
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_nan_policy_is_held_then_damped_and_counted(tmp_path: Path) -> None:
+    import numpy as np
+
+    from tests.conftest import make_linear_onnx
+
+    make_linear_onnx(tmp_path / "nan.onnx", np.zeros((100, 29)), nan_output=True)
+    text = (ROOT / "configs" / "policies" / "fastsac.yaml").read_text().replace("fastsac_g1_29dof.onnx", "nan.onnx")
+    (tmp_path / "nan.yaml").write_text(text)
+    report_path = tmp_path / "nan.json"
+    result = g1ctl("sim", "--policy", str(tmp_path / "nan.yaml"), "--duration", "2", "--report", str(report_path))
+    assert result.returncode == 1
+    assert "non-finite" in result.stderr and "Traceback" not in result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["nonfinite_actions"] == 3
+    assert report["final_mode"] == "damp" and report["damp_reason"].startswith("policy fault")
 
 
 def one_line_error(result: subprocess.CompletedProcess[str], code: int = 2) -> str:
