@@ -1,0 +1,205 @@
+"""MIT-mode CAN frames of CubeMars AK and Damiao DM actuators.
+
+Command (8 bytes, big-endian bit fields): position 16 bits, velocity 12, kp 12, kd 12,
+torque 12 — position in bytes 0-1; velocity in byte 2 and the high nibble of byte 3; kp
+in the low nibble of byte 3 and byte 4; kd in byte 5 and the high nibble of byte 6;
+torque in the low nibble of byte 6 and byte 7. Each value is clamped to its model's
+range by the host (the firmware does not clamp) and scaled
+`uint = int((x - min) * ((1 << bits) - 1) / (max - min))`.
+
+Replies: the 6-byte form (id, position 16, velocity 12, torque 12), CubeMars' 8-byte
+form adding temperature (int8, deg C) and an error code, and Damiao's 8-byte form with
+the error in the high nibble of byte 0 and MOSFET and rotor temperatures in bytes 6-7.
+Sources: CubeMars AK series product manual (MIT mode), Damiao DM-J4310-2EC manual.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+ENTER_MOTOR_MODE = bytes.fromhex("fffffffffffffffc")
+EXIT_MOTOR_MODE = bytes.fromhex("fffffffffffffffd")
+SET_ZERO = bytes.fromhex("fffffffffffffffe")
+SPECIAL_FRAMES = {ENTER_MOTOR_MODE: "enter", EXIT_MOTOR_MODE: "exit", SET_ZERO: "zero"}
+
+ReplyVariant = Literal["basic", "cubemars", "damiao"]
+REPLY_VARIANTS: tuple[str, ...] = ("basic", "cubemars", "damiao")
+
+CUBEMARS_ERRORS = {
+    0: "ok",
+    1: "motor over-temperature",
+    2: "over-current",
+    3: "over-voltage",
+    4: "under-voltage",
+    5: "encoder fault",
+    6: "MOSFET over-temperature",
+    7: "motor stall",
+}
+DAMIAO_STATES = {
+    0x0: "disabled",
+    0x1: "ok",  # enabled
+    0x8: "over-voltage",
+    0x9: "under-voltage",
+    0xA: "over-current",
+    0xB: "MOSFET over-temperature",
+    0xC: "coil over-temperature",
+    0xD: "communication lost",
+    0xE: "overload",
+}
+DAMIAO_HEALTHY = (0x0, 0x1)
+
+
+@dataclass(frozen=True)
+class MitRanges:
+    """Symmetric position/velocity/torque ranges and gain ranges of one motor model."""
+
+    p_max: float
+    v_max: float
+    t_max: float
+    kp_max: float = 500.0
+    kd_max: float = 5.0
+
+
+# Per-model ranges from the vendors' manuals (CubeMars AK series MIT-mode tables, Damiao
+# DM series defaults). A joint map may override any of them.
+MOTOR_MODELS: dict[str, MitRanges] = {
+    "AK80-9": MitRanges(p_max=12.5, v_max=50.0, t_max=18.0),
+    "AK70-10": MitRanges(p_max=12.5, v_max=50.0, t_max=24.0),
+    "AK60-6": MitRanges(p_max=12.5, v_max=45.0, t_max=15.0),
+    "AK10-9": MitRanges(p_max=12.5, v_max=50.0, t_max=65.0),
+    "DM4310": MitRanges(p_max=12.5, v_max=30.0, t_max=10.0),
+    "DM4340": MitRanges(p_max=12.5, v_max=10.0, t_max=28.0),
+    "DM8009": MitRanges(p_max=12.5, v_max=45.0, t_max=54.0),
+    "DM10010L": MitRanges(p_max=12.5, v_max=25.0, t_max=200.0),
+}
+
+
+@dataclass(frozen=True)
+class MitCommand:
+    position: float
+    velocity: float
+    kp: float
+    kd: float
+    torque: float
+
+
+@dataclass(frozen=True)
+class MitReply:
+    motor_id: int
+    position: float
+    velocity: float
+    torque: float
+    temperature: float | None = None  # deg C (CubeMars: motor; Damiao: rotor)
+    mosfet_temperature: float | None = None  # deg C (Damiao)
+    error_code: int = 0
+    error: str = "ok"
+
+    @property
+    def faulted(self) -> bool:
+        return self.error not in ("ok", "disabled")
+
+
+def float_to_uint(x: float, lo: float, hi: float, bits: int) -> int:
+    """Clamp `x` to [lo, hi] and scale it to an unsigned `bits`-bit integer (truncating)."""
+    x = min(max(x, lo), hi)
+    return int((x - lo) * ((1 << bits) - 1) / (hi - lo))
+
+
+def uint_to_float(u: int, lo: float, hi: float, bits: int) -> float:
+    return u * (hi - lo) / ((1 << bits) - 1) + lo
+
+
+def encode_command(r: MitRanges, position: float, velocity: float, kp: float, kd: float, torque: float) -> bytes:
+    p = float_to_uint(position, -r.p_max, r.p_max, 16)
+    v = float_to_uint(velocity, -r.v_max, r.v_max, 12)
+    kp_u = float_to_uint(kp, 0.0, r.kp_max, 12)
+    kd_u = float_to_uint(kd, 0.0, r.kd_max, 12)
+    t = float_to_uint(torque, -r.t_max, r.t_max, 12)
+    return bytes(
+        (
+            p >> 8,
+            p & 0xFF,
+            v >> 4,
+            ((v & 0xF) << 4) | (kp_u >> 8),
+            kp_u & 0xFF,
+            kd_u >> 4,
+            ((kd_u & 0xF) << 4) | (t >> 8),
+            t & 0xFF,
+        )
+    )
+
+
+def decode_command(r: MitRanges, data: bytes) -> MitCommand:
+    """The firmware's side: the command values an 8-byte frame carries."""
+    if len(data) != 8:
+        raise ValueError(f"MIT command must be 8 bytes, got {len(data)}")
+    p = (data[0] << 8) | data[1]
+    v = (data[2] << 4) | (data[3] >> 4)
+    kp_u = ((data[3] & 0xF) << 8) | data[4]
+    kd_u = (data[5] << 4) | (data[6] >> 4)
+    t = ((data[6] & 0xF) << 8) | data[7]
+    return MitCommand(
+        position=uint_to_float(p, -r.p_max, r.p_max, 16),
+        velocity=uint_to_float(v, -r.v_max, r.v_max, 12),
+        kp=uint_to_float(kp_u, 0.0, r.kp_max, 12),
+        kd=uint_to_float(kd_u, 0.0, r.kd_max, 12),
+        torque=uint_to_float(t, -r.t_max, r.t_max, 12),
+    )
+
+
+def encode_reply(
+    r: MitRanges,
+    variant: ReplyVariant,
+    motor_id: int,
+    position: float,
+    velocity: float,
+    torque: float,
+    temperature: float = 25.0,
+    mosfet_temperature: float = 25.0,
+    error_code: int = 0,
+) -> bytes:
+    """The firmware's side: a status reply in the given variant."""
+    p = float_to_uint(position, -r.p_max, r.p_max, 16)
+    v = float_to_uint(velocity, -r.v_max, r.v_max, 12)
+    t = float_to_uint(torque, -r.t_max, r.t_max, 12)
+    if variant == "damiao":
+        first = (motor_id & 0x0F) | ((error_code & 0x0F) << 4)
+    else:
+        first = motor_id & 0xFF
+    body = bytes((first, p >> 8, p & 0xFF, v >> 4, ((v & 0xF) << 4) | (t >> 8), t & 0xFF))
+    if variant == "basic":
+        return body
+    if variant == "cubemars":
+        return body + bytes((int(max(-128, min(127, temperature))) & 0xFF, error_code & 0xFF))
+    return body + bytes((int(max(0, min(255, mosfet_temperature))), int(max(0, min(255, temperature)))))
+
+
+def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:
+    """Decode a status reply; a frame of the wrong length raises `ValueError`."""
+    expected = 6 if variant == "basic" else 8
+    if len(data) != expected:
+        raise ValueError(f"MIT {variant} reply must be {expected} bytes, got {len(data)}")
+    p = (data[1] << 8) | data[2]
+    v = (data[3] << 4) | (data[4] >> 4)
+    t = ((data[4] & 0xF) << 8) | data[5]
+    position = uint_to_float(p, -r.p_max, r.p_max, 16)
+    velocity = uint_to_float(v, -r.v_max, r.v_max, 12)
+    torque = uint_to_float(t, -r.t_max, r.t_max, 12)
+    if variant == "basic":
+        return MitReply(data[0], position, velocity, torque)
+    if variant == "cubemars":
+        temp = data[6] - 256 if data[6] > 127 else data[6]
+        code = data[7]
+        return MitReply(data[0], position, velocity, torque, float(temp), None, code, CUBEMARS_ERRORS.get(code, f"unknown error {code}"))
+    code = data[0] >> 4
+    return MitReply(
+        data[0] & 0x0F,
+        position,
+        velocity,
+        torque,
+        float(data[7]),
+        float(data[6]),
+        code,
+        DAMIAO_STATES.get(code, f"unknown state {code:#x}"),
+    )

@@ -1,0 +1,177 @@
+"""Unitree GO-M8010-style RS-485 motor frames (little-endian).
+
+Command, 17 bytes: header FE EE; byte 2 = motor id (bits 0-3) | mode (bits 4-6: 0 brake,
+1 FOC, 2 calibrate); int16 torque = tau * 256; int16 speed = dq * 256 / (2 pi);
+int32 position = q * 32768 / (2 pi); uint16 kp = kp * 1280; uint16 kd = kd * 1280; each
+truncated toward zero after clamping to its field's range; CRC-16/KERMIT over bytes 0-14
+in bytes 15-16. Reply, 16 bytes: header FD EE, id/mode byte, torque, speed, position with
+the same scales, int8 temperature, uint16 whose bits 0-2 are the error code, CRC over
+bytes 0-13 in bytes 14-15. All quantities are on the rotor side; `GearRatio` converts.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+
+from hw.protocols.crc import crc16_kermit
+
+COMMAND_HEADER = b"\xfe\xee"
+REPLY_HEADER = b"\xfd\xee"
+COMMAND_SIZE = 17
+REPLY_SIZE = 16
+MODE_BRAKE, MODE_FOC, MODE_CALIBRATE = 0, 1, 2
+GO_M8010_GEAR_RATIO = 6.33
+
+ERRORS = {0: "ok", 1: "overheat", 2: "overcurrent", 3: "overvoltage", 4: "encoder fault"}
+
+_TORQUE_SCALE = 256.0
+_SPEED_SCALE = 256.0 / (2.0 * math.pi)
+_POSITION_SCALE = 32768.0 / (2.0 * math.pi)
+_GAIN_SCALE = 1280.0
+_CMD = struct.Struct("<2sBhhiHH")
+_REPLY = struct.Struct("<2sBhhibH")
+
+
+class FrameError(ValueError):
+    """A frame with the wrong length, header or CRC."""
+
+
+@dataclass(frozen=True)
+class MotorCommand:
+    motor_id: int
+    mode: int
+    torque: float
+    speed: float
+    position: float
+    kp: float
+    kd: float
+
+
+@dataclass(frozen=True)
+class MotorReply:
+    motor_id: int
+    mode: int
+    torque: float
+    speed: float
+    position: float
+    temperature: int
+    error_code: int
+
+    @property
+    def error(self) -> str:
+        return ERRORS.get(self.error_code, f"unknown error {self.error_code}")
+
+
+def _fixed(x: float, scale: float, lo: int, hi: int) -> int:
+    """Scale, clamp to the field's range and truncate toward zero."""
+    return int(min(max(x * scale, lo), hi))
+
+
+def _id_mode(motor_id: int, mode: int) -> int:
+    if not 0 <= motor_id <= 15:
+        raise ValueError(f"RS-485 motor id must be 0-15, got {motor_id}")
+    if not 0 <= mode <= 7:
+        raise ValueError(f"RS-485 mode must be 0-7, got {mode}")
+    return (motor_id & 0x0F) | (mode << 4)
+
+
+def encode_command(motor_id: int, mode: int, torque: float, speed: float, position: float, kp: float, kd: float) -> bytes:
+    body = _CMD.pack(
+        COMMAND_HEADER,
+        _id_mode(motor_id, mode),
+        _fixed(torque, _TORQUE_SCALE, -32768, 32767),
+        _fixed(speed, _SPEED_SCALE, -32768, 32767),
+        _fixed(position, _POSITION_SCALE, -(2**31), 2**31 - 1),
+        _fixed(kp, _GAIN_SCALE, 0, 65535),
+        _fixed(kd, _GAIN_SCALE, 0, 65535),
+    )
+    return body + struct.pack("<H", crc16_kermit(body))
+
+
+def decode_command(frame: bytes) -> MotorCommand:
+    _check(frame, COMMAND_SIZE, COMMAND_HEADER, "command")
+    _, id_mode, tau, dq, q, kp, kd = _CMD.unpack_from(frame)
+    return MotorCommand(
+        id_mode & 0x0F,
+        (id_mode >> 4) & 0x07,
+        tau / _TORQUE_SCALE,
+        dq / _SPEED_SCALE,
+        q / _POSITION_SCALE,
+        kp / _GAIN_SCALE,
+        kd / _GAIN_SCALE,
+    )
+
+
+def encode_reply(motor_id: int, mode: int, torque: float, speed: float, position: float, temperature: int, error_code: int = 0) -> bytes:
+    body = _REPLY.pack(
+        REPLY_HEADER,
+        _id_mode(motor_id, mode),
+        _fixed(torque, _TORQUE_SCALE, -32768, 32767),
+        _fixed(speed, _SPEED_SCALE, -32768, 32767),
+        _fixed(position, _POSITION_SCALE, -(2**31), 2**31 - 1),
+        int(min(max(temperature, -128), 127)),
+        error_code & 0x7,
+    )
+    return body + struct.pack("<H", crc16_kermit(body))
+
+
+def decode_reply(frame: bytes) -> MotorReply:
+    _check(frame, REPLY_SIZE, REPLY_HEADER, "reply")
+    _, id_mode, tau, dq, q, temp, err = _REPLY.unpack_from(frame)
+    return MotorReply(id_mode & 0x0F, (id_mode >> 4) & 0x07, tau / _TORQUE_SCALE, dq / _SPEED_SCALE, q / _POSITION_SCALE, temp, err & 0x7)
+
+
+def _check(frame: bytes, size: int, header: bytes, what: str) -> None:
+    if len(frame) != size:
+        raise FrameError(f"RS-485 {what} must be {size} bytes, got {len(frame)}")
+    if frame[:2] != header:
+        raise FrameError(f"RS-485 {what} header must be {header.hex()}, got {frame[:2].hex()}")
+    crc = crc16_kermit(frame[:-2])
+    stored = frame[-2] | (frame[-1] << 8)
+    if crc != stored:
+        raise FrameError(f"RS-485 {what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
+
+
+@dataclass(frozen=True)
+class GearRatio:
+    """Joint side <-> rotor side: q, dq scale by the ratio; torque by its inverse; gains by its inverse square."""
+
+    ratio: float = GO_M8010_GEAR_RATIO
+
+    def to_rotor(self, q: float, dq: float, tau: float, kp: float, kd: float) -> tuple[float, float, float, float, float]:
+        g = self.ratio
+        return q * g, dq * g, tau / g, kp / (g * g), kd / (g * g)
+
+    def to_joint(self, q: float, dq: float, tau: float) -> tuple[float, float, float]:
+        g = self.ratio
+        return q / g, dq / g, tau * g
+
+
+class FrameSplitter:
+    """Cuts fixed-size frames with a known header out of a byte stream, resyncing after garbage."""
+
+    def __init__(self, header: bytes, size: int) -> None:
+        self.header = header
+        self.size = size
+        self._buf = bytearray()
+        self.discarded_bytes = 0
+
+    def feed(self, data: bytes) -> list[bytes]:
+        self._buf += data
+        frames = []
+        while True:
+            start = self._buf.find(self.header)
+            if start < 0:
+                keep = 1 if self._buf[-1:] == self.header[:1] else 0
+                self.discarded_bytes += len(self._buf) - keep
+                del self._buf[: len(self._buf) - keep]
+                return frames
+            if start:
+                self.discarded_bytes += start
+                del self._buf[:start]
+            if len(self._buf) < self.size:
+                return frames
+            frames.append(bytes(self._buf[: self.size]))
+            del self._buf[: self.size]
