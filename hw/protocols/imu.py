@@ -56,4 +56,5 @@ def decode_imu(frame: bytes) -> ImuSample:
     _, kind, seq, *values = _BODY.unpack_from(frame)
     if kind != FRAME_TYPE:
         raise FrameError(f"IMU frame type {kind:#04x} is not {FRAME_TYPE:#04x}")
-    return ImuSample(seq, tuple(values[0:4]), tuple(values[4:7]), tuple(values[7:10]))  # type: ignore[arg-type]
+    q, w, a = values[0:4], values[4:7], values[7:10]
+    return ImuSample(seq, (q[0], q[1], q[2], q[3]), (w[0], w[1], w[2]), (a[0], a[1], a[2]))

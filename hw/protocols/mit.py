@@ -163,10 +163,7 @@ def encode_reply(
     p = float_to_uint(position, -r.p_max, r.p_max, 16)
     v = float_to_uint(velocity, -r.v_max, r.v_max, 12)
     t = float_to_uint(torque, -r.t_max, r.t_max, 12)
-    if variant == "damiao":
-        first = (motor_id & 0x0F) | ((error_code & 0x0F) << 4)
-    else:
-        first = motor_id & 0xFF
+    first = (motor_id & 0x0F) | ((error_code & 0x0F) << 4) if variant == "damiao" else motor_id & 0xFF
     body = bytes((first, p >> 8, p & 0xFF, v >> 4, ((v & 0xF) << 4) | (t >> 8), t & 0xFF))
     if variant == "basic":
         return body
