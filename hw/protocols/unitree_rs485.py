@@ -160,7 +160,7 @@ class FrameSplitter:
 
     def feed(self, data: bytes) -> list[bytes]:
         self._buf += data
-        frames = []
+        frames: list[bytes] = []
         while True:
             start = self._buf.find(self.header)
             if start < 0:
