@@ -21,7 +21,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from controller.yamlconfig import from_dict, load_yaml
+from hw.yamlconfig import from_dict, load_yaml
 from hw.errors import AssetError
 
 ENV_ASSETS_DIR = "G1CTL_ASSETS_DIR"

@@ -19,7 +19,7 @@ from controller.assets import ensure_assets
 from controller.inputs.scripted import load_scenario
 from controller.policies import load_policy
 from controller.sim_session import SimRunConfig, run
-from sim import constants
+from hw import g1 as constants
 from sim.world import build_model
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from controller.assets import Assets
 from controller.policy import OnnxPolicy, PolicyConfig
-from controller.yamlconfig import load_config
+from hw.yamlconfig import load_config
 from hw.errors import ConfigError
 
 POLICY_DIR = Path(__file__).resolve().parent.parent / "configs" / "policies"

@@ -10,7 +10,7 @@ import numpy as np
 from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import FloatArray, JointCommand, RobotState
-from sim import constants
+from hw import g1 as constants
 
 
 @dataclass(frozen=True)

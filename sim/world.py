@@ -14,7 +14,7 @@ from pathlib import Path
 import mujoco
 
 from hw.errors import AssetError
-from sim.constants import EFFORT_LIMITS
+from hw.g1 import EFFORT_LIMITS
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import pytest
 from onnx import TensorProto, helper, numpy_helper
 
 from controller.assets import Assets, ensure_assets
-from sim.constants import JOINT_NAMES
+from hw.g1 import JOINT_NAMES
 
 
 @pytest.fixture(scope="session")

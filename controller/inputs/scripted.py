@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
-from controller.yamlconfig import load_config
+from hw.yamlconfig import load_config
 from hw.errors import ConfigError
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "configs" / "scenarios"

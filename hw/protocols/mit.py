@@ -52,27 +52,16 @@ DAMIAO_HEALTHY = (0x0, 0x1)
 
 @dataclass(frozen=True)
 class MitRanges:
-    """Symmetric position/velocity/torque ranges and gain ranges of one motor model."""
+    """Symmetric position/velocity/torque ranges and gain ranges of one motor model.
+
+    Values per model live in `configs/motors.yaml`, with their sources.
+    """
 
     p_max: float
     v_max: float
     t_max: float
     kp_max: float = 500.0
     kd_max: float = 5.0
-
-
-# Per-model ranges from the vendors' manuals (CubeMars AK series MIT-mode tables, Damiao
-# DM series defaults). A joint map may override any of them.
-MOTOR_MODELS: dict[str, MitRanges] = {
-    "AK80-9": MitRanges(p_max=12.5, v_max=50.0, t_max=18.0),
-    "AK70-10": MitRanges(p_max=12.5, v_max=50.0, t_max=24.0),
-    "AK60-6": MitRanges(p_max=12.5, v_max=45.0, t_max=15.0),
-    "AK10-9": MitRanges(p_max=12.5, v_max=50.0, t_max=65.0),
-    "DM4310": MitRanges(p_max=12.5, v_max=30.0, t_max=10.0),
-    "DM4340": MitRanges(p_max=12.5, v_max=10.0, t_max=28.0),
-    "DM8009": MitRanges(p_max=12.5, v_max=45.0, t_max=54.0),
-    "DM10010L": MitRanges(p_max=12.5, v_max=25.0, t_max=200.0),
-}
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from controller.observation import ObservationBuilder, ObservationLayout, ObsTer
 from controller.policy import GaitConfig, OnnxPolicy, PolicyConfig, quat_rotate_inverse
 from hw.errors import ConfigError, PolicyError
 from hw.types import RobotState
-from sim.constants import JOINT_NAMES
+from hw.g1 import JOINT_NAMES
 
 N = len(JOINT_NAMES)
 LAYOUT = ObservationLayout(

@@ -8,7 +8,7 @@ import pytest
 
 from controller.inputs.scripted import Scenario
 from controller.policy import PolicyConfig
-from controller.yamlconfig import load_config
+from hw.yamlconfig import load_config
 from hw.errors import ConfigError
 
 POLICY_DIR = Path(__file__).resolve().parents[2] / "configs" / "policies"

@@ -10,8 +10,8 @@ from hw.protocols import imu, mit
 from hw.protocols import unitree_rs485 as rs485
 from hw.protocols.crc import crc16_kermit
 
-AK80_9 = mit.MOTOR_MODELS["AK80-9"]
-DM4310 = mit.MOTOR_MODELS["DM4310"]
+AK80_9 = mit.MitRanges(p_max=12.5, v_max=50.0, t_max=18.0, kp_max=500.0, kd_max=5.0)
+DM4310 = mit.MitRanges(p_max=12.5, v_max=30.0, t_max=10.0, kp_max=500.0, kd_max=5.0)
 
 
 def test_crc16_kermit_check_value() -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hw.types import JointCommand
-from sim import constants
+from hw import g1 as constants
 from sim.robot import SimRobot
 
 

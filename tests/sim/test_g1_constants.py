@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim import constants
+from hw import g1 as constants
 
 
 def test_joint_order_matches_model(g1_model) -> None:
