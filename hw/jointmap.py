@@ -1,0 +1,154 @@
+"""Hardware configs: buses, the joint map (joint -> bus, protocol, motor), IMU and safety limits.
+
+`load_hardware_config` validates everything a bring-up engineer can get wrong in the
+YAML: unknown keys, missing or unknown joints, duplicate motor ids on one bus, a bus that
+is not declared, a motor model without ranges, limits in the wrong order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+from hw.errors import ConfigError
+from hw.g1 import JOINT_NAMES
+from hw.protocols.mit import MitRanges
+from hw.yamlconfig import from_dict, load_config, load_yaml
+
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+HARDWARE_DIR = CONFIG_DIR / "hardware"
+MOTORS_PATH = CONFIG_DIR / "motors.yaml"
+
+
+@dataclass(frozen=True)
+class BusConfig:
+    """A CAN bus (python-can interface + channel) or a serial port (device path or pyserial URL)."""
+
+    kind: Literal["can", "serial"]
+    interface: str = ""  # can: socketcan, pcan, slcan, virtual, ...
+    channel: str = ""  # can: can0, PCAN_USBBUS1, ...
+    bitrate: int = 1_000_000
+    port: str = ""  # serial: /dev/ttyUSB0, loop://, ...
+    baudrate: int = 4_000_000
+    rs485: bool = False  # serial: drive RTS for the transceiver direction (kernel RS-485 mode)
+
+    def __post_init__(self) -> None:
+        if self.kind == "can" and not (self.interface and self.channel):
+            raise ValueError("a can bus needs 'interface' and 'channel'")
+        if self.kind == "serial" and not self.port:
+            raise ValueError("a serial bus needs 'port'")
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    bus: str
+    protocol: Literal["mit", "unitree-rs485"]
+    id: int
+    position_limits: tuple[float, float]
+    velocity_limit: float
+    torque_limit: float
+    model: str = ""  # mit: a model in configs/motors.yaml
+    reply: Literal["basic", "cubemars", "damiao"] = "cubemars"  # mit reply variant
+    direction: int = 1  # +1 or -1: motor positive direction relative to the joint
+    zero_offset: float = 0.0  # joint angle (rad) when the motor reads zero
+    gear_ratio: float = 1.0  # rotor turns per joint turn (the motor reports rotor-side values)
+    kp: float = 20.0  # bring-up gains (soft start, sweep)
+    kd: float = 1.0
+
+    def __post_init__(self) -> None:
+        lo, hi = self.position_limits
+        if not lo < hi:
+            raise ValueError(f"position_limits must be [low, high] with low < high, got {list(self.position_limits)}")
+        if self.direction not in (1, -1):
+            raise ValueError(f"direction must be 1 or -1, got {self.direction}")
+        if self.gear_ratio <= 0 or self.velocity_limit <= 0 or self.torque_limit <= 0:
+            raise ValueError("gear_ratio, velocity_limit and torque_limit must be positive")
+        if self.protocol == "mit" and not self.model:
+            raise ValueError("a mit joint needs 'model'")
+        if self.protocol == "unitree-rs485" and not 0 <= self.id <= 14:
+            raise ValueError(f"an RS-485 motor id must be 0-14 (15 is broadcast), got {self.id}")
+        if self.protocol == "mit" and not 1 <= self.id <= 0x7FF:
+            raise ValueError(f"a CAN motor id must be 1-2047, got {self.id}")
+
+
+@dataclass(frozen=True)
+class ImuConfig:
+    bus: str
+    timeout: float = 0.05  # s without a valid frame: fault
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    reply_timeout: float = 0.05  # s: a motor whose newest reply is older is a fault
+    cycle_timeout: float = 0.003  # s: how long one cycle waits for the replies
+    max_position_step: float = 0.3  # rad: largest change of a position target between cycles
+    max_temperature: float = 85.0  # deg C
+    damping_kd: float = 2.0  # N m s/rad, joint side, while damping
+    soft_start_time: float = 3.0  # s: ramp to the default pose on activate
+    max_missed_replies: int = 5  # consecutive cycles a motor may miss before it is a fault
+
+
+@dataclass(frozen=True)
+class HardwareConfig:
+    buses: dict[str, BusConfig]
+    joints: dict[str, JointConfig]
+    description: str = ""
+    imu: ImuConfig | None = None
+    safety: SafetyConfig = field(default_factory=SafetyConfig)
+
+
+def load_motor_models(path: Path = MOTORS_PATH) -> dict[str, MitRanges]:
+    data = load_yaml(path)
+    if not isinstance(data, dict) or not isinstance(data.get("models"), dict):
+        raise ConfigError(f"{path}: expected a 'models' mapping")
+    return {name: from_dict(MitRanges, values, str(path), f"models.{name}") for name, values in data["models"].items()}
+
+
+def available_hardware() -> list[str]:
+    return sorted(p.stem for p in HARDWARE_DIR.glob("*.yaml"))
+
+
+def hardware_config_path(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") and path.is_file():
+        return path
+    path = HARDWARE_DIR / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError(f"unknown hardware config '{name_or_path}' (available: {', '.join(available_hardware())}, or a path to a .yaml)")
+    return path
+
+
+def load_hardware_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig:
+    path = hardware_config_path(name_or_path)
+    cfg = load_config(HardwareConfig, path)
+    validate(cfg, str(path), expected_joints, load_motor_models())
+    return cfg
+
+
+def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:
+    missing = [j for j in expected_joints if j not in cfg.joints]
+    if missing:
+        raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
+    unknown = [j for j in cfg.joints if j not in expected_joints]
+    if unknown:
+        raise ConfigError(f"{source}: unknown joints in the joint map: {', '.join(unknown)}")
+    seen: dict[tuple[str, int], str] = {}
+    for name, joint in cfg.joints.items():
+        if joint.bus not in cfg.buses:
+            raise ConfigError(f"{source}: joints.{name}.bus: no bus '{joint.bus}' (buses: {', '.join(cfg.buses)})")
+        bus = cfg.buses[joint.bus]
+        wanted = "can" if joint.protocol == "mit" else "serial"
+        if bus.kind != wanted:
+            raise ConfigError(f"{source}: joints.{name}: protocol {joint.protocol} needs a {wanted} bus, '{joint.bus}' is {bus.kind}")
+        if joint.protocol == "mit" and joint.model not in models:
+            raise ConfigError(f"{source}: joints.{name}.model: unknown motor model '{joint.model}' (known: {', '.join(models)})")
+        key = (joint.bus, joint.id)
+        if key in seen:
+            raise ConfigError(f"{source}: joints {seen[key]} and {name} share motor id {joint.id} on bus '{joint.bus}'")
+        seen[key] = name
+    if cfg.imu is not None:
+        if cfg.imu.bus not in cfg.buses or cfg.buses[cfg.imu.bus].kind != "serial":
+            raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is not a serial bus of this config")
+        if any(j.bus == cfg.imu.bus for j in cfg.joints.values()):
+            raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is shared with motors; give the IMU its own port")
