@@ -21,8 +21,8 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from hw.yamlconfig import from_dict, load_yaml
 from hw.errors import AssetError
+from hw.yamlconfig import from_dict, load_yaml
 
 ENV_ASSETS_DIR = "G1CTL_ASSETS_DIR"
 MANIFEST_PATH = Path(__file__).resolve().parent.parent / "configs" / "assets.yaml"

@@ -3,7 +3,7 @@
 Usage:
     g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--duration S] [--seed N]
               [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
-              [--input scripted|keyboard|gamepad] [--progress]
+              [--input scripted|keyboard|gamepad] [--hardware sim-can|sim-mixed|PATH] [--progress]
     g1ctl assets fetch [--assets-dir DIR]
     g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
     g1ctl scenarios            (list the shipped scenarios and policies)
@@ -40,6 +40,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--picture", type=Path, default=None, help="write a .png of the final frame")
     sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
+    sim.add_argument("--hardware", default=None, help="drive the sim through a hardware config's codecs and buses (sim-can, sim-mixed)")
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
     sim.add_argument("--progress", action="store_true", help="show a progress bar")
@@ -104,7 +105,7 @@ def _sim(args: argparse.Namespace) -> int:
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, duration=args.duration, seed=args.seed, input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
-        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir,
+        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware,
     )  # fmt: skip
     report = run(cfg)
     summary = {
@@ -117,7 +118,10 @@ def _sim(args: argparse.Namespace) -> int:
             print(f"{key}: {report[key]}")
     if args.report:
         print(f"report: {args.report}")
-    if report["final_mode"] == "damp" and report["damp_reason"].startswith("policy fault"):
+    if "hw" in report:
+        hw = report["hw"]
+        print(json.dumps({"hw": {k: hw[k] for k in ("cycle_ms", "frames_sent", "frames_received", "dropped", "crc_errors", "faults")}}))
+    if report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"):
         print(f"g1ctl: run ended damped: {report['damp_reason']}", file=sys.stderr)
         return 1
     return 0

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from controller.assets import Assets
 from controller.policy import OnnxPolicy, PolicyConfig
-from hw.yamlconfig import load_config
 from hw.errors import ConfigError
+from hw.yamlconfig import load_config
 
 POLICY_DIR = Path(__file__).resolve().parent.parent / "configs" / "policies"
 

@@ -22,8 +22,10 @@ from controller.loop import RateLoop, RealtimeSimulationClock, SimulationClock
 from controller.metrics import TrackingMetrics, percentiles_ms
 from controller.plots import plot_tracking
 from controller.policies import load_policy
+from controller.sim_backends import DirectBackend, HardwareBackend
 from controller.supervisor import Mode, Supervisor
 from hw.errors import ConfigError
+from hw.jointmap import load_hardware_config
 from sim.robot import SimRobot
 from sim.world import build_model
 
@@ -45,6 +47,7 @@ class SimRunConfig:
     progress: bool = False
     assets_dir: str | None = None
     video_fps: int = 20
+    hardware: str | None = None  # a hardware config: drive the sim through its codecs and buses
     picture: Path | None = None  # PNG of the final frame
 
 
@@ -71,13 +74,17 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     assets = ensure_assets(cfg.assets_dir)
     robot = SimRobot(build_model(assets.g1_mjcf))
     policy = load_policy(cfg.policy, assets, robot.joint_names)
+    if cfg.hardware is not None:
+        load_hardware_config(cfg.hardware)  # a bad config is a user error before anything starts
     interactive = cfg.input != "scripted"
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
     if duration is not None and duration <= 0:
         raise ConfigError(f"--duration must be positive, got {duration}")
     realtime = cfg.realtime or interactive or cfg.viewer
-    clock = (RealtimeSimulationClock if realtime else SimulationClock)(lambda: robot.time, robot.step_until)
+    backend: DirectBackend | HardwareBackend = DirectBackend(robot) if cfg.hardware is None else HardwareBackend(robot, cfg.hardware)
+    clock = (RealtimeSimulationClock if realtime else SimulationClock)(lambda: robot.time, backend.advance_to)
     loop = RateLoop(clock, policy.cfg.rate_hz)
+    controlled = backend.robot
     supervisor = Supervisor()
     metrics = TrackingMetrics()
     step_times: list[float] = []
@@ -86,7 +93,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     interrupted = False
 
     with ExitStack() as stack:
-        stack.enter_context(robot)
+        stack.callback(backend.close)
         source, _steps = make_source(cfg, policy.command_limits, duration or 0.0)
         stack.enter_context(source)
         if cfg.video is not None:
@@ -100,23 +107,24 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
         sim_start = robot.time
         try:
             for tick in loop.run(duration):
-                state = robot.read()
+                truth = robot.read() if controlled is not robot else None
+                state = controlled.read()
                 sample = source.poll(state.time)
-                velocity = supervisor.update(sample, policy.latched_fault)
-                metrics.record(state.time, state.base_pos, state.base_quat, velocity)
+                velocity = supervisor.update(sample, policy.latched_fault or backend.fault())
+                measured = truth or state  # metrics use the simulator's ground truth
+                metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
                 t0 = time.perf_counter()
                 command = policy.damping_command() if supervisor.mode is Mode.DAMP else policy.step(state, velocity)
                 step_times.append(time.perf_counter() - t0)
-                robot.write(command)
+                controlled.write(command)
                 if recorder is not None:
                     recorder.maybe_capture(robot.data)
                 if viewer is not None:
                     viewer.sync()
                 if robot.has_fallen():
                     falls.append(round(state.time - sim_start, 3))
-                    if supervisor.mode is Mode.DAMP:
-                        break  # damped on purpose: nothing left to run
-                    robot.reset()
+                    if supervisor.mode is Mode.DAMP or not backend.recover_from_fall():
+                        break  # damped on purpose, or on hardware: nothing left to run
                     policy.reset()
                     metrics.reset_reference()
                 if tick % 10 == 9:
@@ -152,6 +160,9 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
         "final_base_position": [round(float(v), 4) for v in final_pos],
         "interrupted": interrupted,
     }
+    hw_report = backend.report()
+    if hw_report is not None:
+        report["hw"] = hw_report
     if recorder is not None:
         report["video"] = str(cfg.video)
     if cfg.picture is not None:

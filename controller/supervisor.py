@@ -1,9 +1,9 @@
 """Run-mode state machine between the command input and the policy.
 
 RUN: the policy tracks the input's velocity. STAND: the stop button was pressed, the
-policy holds a zero command. DAMP: emergency stop, a dead input or a policy fault;
+policy holds a zero command. DAMP: emergency stop, a dead input, or a policy or hardware fault;
 every joint is damped and the mode latches until the start button is pressed on a live
-input with no policy fault.
+input with no fault present.
 """
 
 from __future__ import annotations
@@ -27,10 +27,10 @@ class Supervisor:
     estops: int = 0
     input_losses: int = 0
 
-    def update(self, sample: CommandSample, policy_fault: str | None) -> VelocityCommand:
+    def update(self, sample: CommandSample, fault: str | None) -> VelocityCommand:
         """Advance the mode on this input sample; returns the velocity the policy should track."""
-        if policy_fault is not None:
-            self._damp(f"policy fault: {policy_fault}")
+        if fault is not None:
+            self._damp(f"fault: {fault}")
         elif sample.buttons.estop:
             if self.mode is not Mode.DAMP:
                 self.estops += 1

@@ -26,3 +26,19 @@ class PolicyError(G1Error, ValueError):
 
 class InputDeviceError(G1Error, ConnectionError):
     """A command input device (gamepad, keyboard) is absent or stopped answering."""
+
+
+class BusError(G1Error, ConnectionError):
+    """A CAN bus or serial port cannot be opened or stopped working."""
+
+
+class MotorNotFoundError(G1Error, ConnectionError):
+    """Configured motors did not answer at configure time."""
+
+
+class HardwareFault(G1Error, RuntimeError):
+    """A latched safety fault: the robot is damped until an explicit re-arm."""
+
+
+class LifecycleError(G1Error, RuntimeError):
+    """A lifecycle transition that is not allowed from the current state."""

@@ -7,10 +7,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from hw import g1 as constants
 from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import FloatArray, JointCommand, RobotState
-from hw import g1 as constants
 
 
 @dataclass(frozen=True)

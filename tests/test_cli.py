@@ -56,7 +56,7 @@ def test_nan_policy_is_held_then_damped_and_counted(tmp_path: Path) -> None:
     assert "non-finite" in result.stderr and "Traceback" not in result.stderr
     report = json.loads(report_path.read_text())
     assert report["nonfinite_actions"] == 3
-    assert report["final_mode"] == "damp" and report["damp_reason"].startswith("policy fault")
+    assert report["final_mode"] == "damp" and report["damp_reason"].startswith("fault")
 
 
 def one_line_error(result: subprocess.CompletedProcess[str], code: int = 2) -> str:

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
-from hw.yamlconfig import load_config
 from hw.errors import ConfigError
+from hw.yamlconfig import load_config
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "configs" / "scenarios"
 

@@ -12,8 +12,8 @@ from controller.inputs.base import VelocityCommand
 from controller.observation import ObservationBuilder, ObservationLayout, ObsTerm
 from controller.policy import GaitConfig, OnnxPolicy, PolicyConfig, quat_rotate_inverse
 from hw.errors import ConfigError, PolicyError
-from hw.types import RobotState
 from hw.g1 import JOINT_NAMES
+from hw.types import RobotState
 
 N = len(JOINT_NAMES)
 LAYOUT = ObservationLayout(

@@ -31,4 +31,4 @@ def test_estop_and_dead_input_latch_damping_until_start() -> None:
 def test_policy_fault_damps_and_cannot_be_rearmed_while_present() -> None:
     sup = Supervisor()
     sup.update(CommandSample(WALK, Buttons(start=True)), "non-finite actions")
-    assert sup.mode is Mode.DAMP and sup.damp_reason.startswith("policy fault")
+    assert sup.mode is Mode.DAMP and sup.damp_reason.startswith("fault")

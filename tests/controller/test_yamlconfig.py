@@ -8,8 +8,8 @@ import pytest
 
 from controller.inputs.scripted import Scenario
 from controller.policy import PolicyConfig
-from hw.yamlconfig import load_config
 from hw.errors import ConfigError
+from hw.yamlconfig import load_config
 
 POLICY_DIR = Path(__file__).resolve().parents[2] / "configs" / "policies"
 

@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from hw.types import JointCommand
 from hw import g1 as constants
+from hw.types import JointCommand
 from sim.robot import SimRobot
 
 

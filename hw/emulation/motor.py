@@ -1,0 +1,72 @@
+"""The state machine of one emulated motor, common to both protocols (motor-side units).
+
+Firmware behaviour emulated: motor mode on/off, a command watchdog after which the motor
+goes limp, set-zero, temperature that rises with the square of the current and cools
+towards ambient, error codes that latch until motor mode is re-entered (or, for RS-485,
+until a brake command), and a seized output for the stuck-motor drill.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hw.drivers import MotorCommand
+from hw.emulation.plant import Plant
+from hw.hardware_robot import motor_to_joint
+from hw.jointmap import JointConfig
+
+AMBIENT_C = 30.0
+HEATING_C_PER_S = 5.0  # at the motor's full torque
+COOLING_TIME_S = 60.0
+OVER_TEMPERATURE_C = 95.0
+
+
+@dataclass
+class EmulatedMotor:
+    joint_name: str
+    joint: JointConfig
+    torque_max: float  # motor side, for the heating model
+    watchdog_s: float = 0.1
+    enabled: bool = False
+    encoder_zero: float = 0.0  # motor-side position that reads as zero
+    temperature: float = AMBIENT_C
+    error_code: int = 0
+    last_command_time: float | None = None
+    _thermal_time: float | None = None
+
+    def apply(self, plant: Plant, command: MotorCommand | None, over_temperature_code: int, stuck: bool) -> None:
+        """Take a new command (None: keep the last) and push the resulting PD law into the plant."""
+        now = plant.time()
+        self._heat(plant, now)
+        if self.temperature > OVER_TEMPERATURE_C and self.error_code == 0:
+            self.error_code = over_temperature_code
+        if command is not None:
+            self.last_command_time = now
+        expired = self.last_command_time is None or now - self.last_command_time > self.watchdog_s
+        if stuck:
+            plant.set_joint_command(self.joint_name, plant.joint_state(self.joint_name)[0], 0.0, 0.0, 500.0, 0.0)
+        elif not self.enabled or self.error_code != 0 or (command is None and expired):
+            plant.set_joint_command(self.joint_name, 0.0, 0.0, 0.0, 0.0, 0.0)  # limp
+        elif command is not None:
+            q, dq, tau = motor_to_joint(self.joint, command.q + self.encoder_zero, command.dq, command.tau)
+            g2 = self.joint.gear_ratio**2
+            plant.set_joint_command(self.joint_name, q, dq, command.kp * g2, command.kd * g2, tau)
+
+    def _heat(self, plant: Plant, now: float) -> None:
+        if self._thermal_time is not None and now > self._thermal_time:
+            dt = now - self._thermal_time
+            torque = abs(plant.joint_state(self.joint_name)[2]) / self.joint.gear_ratio
+            load = min(torque / self.torque_max, 1.5) if self.torque_max > 0 else 0.0
+            self.temperature += dt * (HEATING_C_PER_S * load * load - (self.temperature - AMBIENT_C) / COOLING_TIME_S)
+        self._thermal_time = now
+
+    def reading(self, plant: Plant) -> tuple[float, float, float]:
+        """Motor-side position (relative to the encoder zero), velocity and torque."""
+        q, dq, tau = plant.joint_state(self.joint_name)
+        j = self.joint
+        s, g = j.direction, j.gear_ratio
+        return s * (q - j.zero_offset) * g - self.encoder_zero, s * dq * g, s * tau / g
+
+    def set_zero(self, plant: Plant) -> None:
+        position, _, _ = self.reading(plant)
+        self.encoder_zero += position

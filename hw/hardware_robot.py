@@ -1,0 +1,358 @@
+"""The robot over real (or simulated) buses, with a ros2_control-shaped lifecycle.
+
+    UNCONFIGURED --configure--> INACTIVE --activate--> ACTIVATING --ramp done--> ACTIVE
+    ACTIVE/ACTIVATING --deactivate--> INACTIVE (damping, then motors disabled)
+    any --fault--> ERROR (damping every cycle, latched) --rearm--> INACTIVE
+
+`cycle()` is one exchange with every motor (the 500 Hz writer calls it): it turns the
+newest joint command into motor frames through the safety layer, sends them on every
+bus, collects the replies and runs the feedback checks. The controller only calls
+`write()` (newest command) and `read()` (newest state).
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from hw import g1
+from hw.drivers import BusCounters, MitBusDriver, MitMotor, MotorCommand, MotorFeedback, Rs485BusDriver
+from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
+from hw.imu import SerialImu
+from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
+from hw.protocols import mit
+from hw.protocols import unitree_rs485 as rs485
+from hw.robot import RobotInterface
+from hw.safety import JointLimits, command_is_finite, feedback_faults, limit_command
+from hw.transport import open_can, open_serial
+from hw.types import JointCommand, RobotState
+
+log = logging.getLogger(__name__)
+
+
+class Lifecycle(enum.Enum):
+    UNCONFIGURED = "unconfigured"
+    INACTIVE = "inactive"
+    ACTIVATING = "activating"
+    ACTIVE = "active"
+    ERROR = "error"
+    CLOSED = "closed"
+
+
+def joint_to_motor(j: JointConfig, q: float, dq: float, kp: float, kd: float, tau: float) -> MotorCommand:
+    """Joint-side PD command -> motor-side (direction, zero offset, gear ratio)."""
+    g, s = j.gear_ratio, j.direction
+    return MotorCommand(q=s * (q - j.zero_offset) * g, dq=s * dq * g, kp=kp / (g * g), kd=kd / (g * g), tau=s * tau / g)
+
+
+def motor_to_joint(j: JointConfig, position: float, velocity: float, torque: float) -> tuple[float, float, float]:
+    g, s = j.gear_ratio, j.direction
+    return s * position / g + j.zero_offset, s * velocity / g, s * torque * g
+
+
+@dataclass(frozen=True)
+class _Slot:
+    """Where one joint lives: its config, its driver and its motor id there."""
+
+    name: str
+    joint: JointConfig
+    driver: MitBusDriver | Rs485BusDriver
+    motor_id: int
+
+
+class HardwareRobot(RobotInterface):
+    def __init__(
+        self,
+        cfg: HardwareConfig,
+        joint_names: tuple[str, ...] = g1.JOINT_NAMES,
+        default_pose: tuple[float, ...] | None = None,
+        stamp_clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        super().__init__()
+        self.cfg = cfg
+        self._names = joint_names
+        self.stamp_clock = stamp_clock
+        self.default_pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
+        self.limits = JointLimits.from_joint_map(joint_names, cfg.joints)
+        self.state = Lifecycle.UNCONFIGURED
+        self.faults: list[str] = []
+        self.fault_count = 0
+        self.clamped_values = 0
+        self.cycles = 0
+        self._drivers: dict[str, MitBusDriver | Rs485BusDriver] = {}
+        self._closed_counters = BusCounters()  # of buses already closed
+        self._slots: list[_Slot] = []
+        self.imu: SerialImu | None = None
+        self._command: JointCommand | None = None
+        self._sent_q: np.ndarray | None = None
+        self._ramp: tuple[float, np.ndarray] | None = None
+        n = len(joint_names)
+        self._damp_kd = np.full(n, cfg.safety.damping_kd)
+        self._zeros = np.zeros(n)
+        self._q = np.zeros(n)
+        self._dq = np.zeros(n)
+        self._tau = np.zeros(n)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self._names
+
+    # -- lifecycle -------------------------------------------------------------------
+    def configure(self) -> None:
+        """Open every bus and port, find every configured motor; fail naming the missing ones."""
+        if self.state is not Lifecycle.UNCONFIGURED:
+            raise LifecycleError(f"configure needs the robot unconfigured, it is {self.state.value}")
+        try:
+            self._open()
+            missing = self._discover()
+        except Exception:
+            self._close_buses()
+            raise
+        if missing:
+            self._close_buses()
+            raise MotorNotFoundError(f"motors did not answer: {', '.join(missing)}; check power, wiring, ids and bitrate")
+        self.state = Lifecycle.INACTIVE
+
+    def _open(self) -> None:
+        models = load_motor_models()
+        by_bus: dict[str, list[tuple[str, JointConfig]]] = {}
+        for name in self._names:
+            joint = self.cfg.joints[name]
+            by_bus.setdefault(joint.bus, []).append((name, joint))
+        for bus_name, joints in by_bus.items():
+            bus_cfg = self.cfg.buses[bus_name]
+            if bus_cfg.kind == "can":
+                motors = [MitMotor(j.id, models[j.model], j.reply) for _, j in joints]
+                driver: MitBusDriver | Rs485BusDriver = MitBusDriver(bus_name, open_can(bus_name, bus_cfg), motors, self.stamp_clock)
+            else:
+                driver = Rs485BusDriver(bus_name, open_serial(bus_name, bus_cfg), [j.id for _, j in joints], self.stamp_clock)
+            self._drivers[bus_name] = driver
+            self._slots.extend(_Slot(name, j, driver, j.id) for name, j in joints)
+        order = {name: i for i, name in enumerate(self._names)}
+        self._slots.sort(key=lambda s: order[s.name])
+        if self.cfg.imu is not None:
+            bus_cfg = self.cfg.buses[self.cfg.imu.bus]
+            self.imu = SerialImu(self.cfg.imu.bus, open_serial(self.cfg.imu.bus, bus_cfg), self.stamp_clock)
+
+    def _discover(self) -> list[str]:
+        """Enable motor mode limp (zero gains) and collect one reply from each motor."""
+        for driver in self._drivers.values():
+            if isinstance(driver, MitBusDriver):
+                driver.send_special(mit.ENTER_MOTOR_MODE)
+                driver.collect(time.monotonic() + 0.05)
+        self._exchange(limp=True, timeout=0.05)
+        return [f"{s.name} (bus {s.joint.bus}, id {s.motor_id})" for s in self._slots if s.driver.feedback[s.motor_id].stamp is None]
+
+    def activate(self) -> None:
+        """Soft start: from the measured pose, ramp to the default pose over `soft_start_time`."""
+        if self.state is not Lifecycle.INACTIVE:
+            raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
+        self._exchange(limp=True, timeout=self.cfg.safety.cycle_timeout * 4)
+        self._update_state()
+        faults = self._check_feedback()
+        if faults:
+            self._enter_error(faults)
+            raise HardwareFault(f"cannot activate: {faults[0]}")
+        self._ramp = (self.stamp_clock(), self._q.copy())
+        self._sent_q = self._q.copy()
+        self.state = Lifecycle.ACTIVATING
+
+    def deactivate(self) -> None:
+        """Damping, then disable every motor."""
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            return
+        for _ in range(3):
+            self._exchange(limp=False, damping=True)
+        for driver in self._drivers.values():
+            if isinstance(driver, MitBusDriver):
+                driver.send_special(mit.EXIT_MOTOR_MODE)
+                driver.collect(time.monotonic() + self.cfg.safety.cycle_timeout)
+        self._exchange(limp=True)
+        if self.state is not Lifecycle.ERROR:
+            self.state = Lifecycle.INACTIVE
+        self._ramp, self._command = None, None
+
+    def rearm(self) -> None:
+        """Leave ERROR explicitly once the feedback is healthy again; the robot is then INACTIVE."""
+        if self.state is not Lifecycle.ERROR:
+            raise LifecycleError(f"rearm needs the robot in error, it is {self.state.value}")
+        self._exchange(limp=False, damping=True)
+        self._update_state()
+        faults = self._check_feedback()
+        if faults:
+            raise HardwareFault(f"cannot re-arm: {faults[0]}")
+        self.faults = []
+        self.state = Lifecycle.INACTIVE
+
+    # -- control ---------------------------------------------------------------------
+    def write(self, command: JointCommand) -> None:
+        if not command_is_finite(command):
+            self._enter_error(["non-finite joint command from the controller"])
+            return
+        self._command = command
+
+    def damp(self) -> None:
+        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            self._exchange(limp=False, damping=True)
+
+    def read(self) -> RobotState:
+        quat, gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
+        if self.imu is not None and self.imu.latest is not None:
+            quat, gyro = np.array(self.imu.latest.quaternion), np.array(self.imu.latest.angular_velocity)
+        return RobotState(
+            time=self.stamp_clock(),
+            joint_pos=self._q.copy(),
+            joint_vel=self._dq.copy(),
+            base_quat=quat,
+            base_ang_vel=gyro,
+            base_pos=np.zeros(3),  # no estimator on hardware yet
+            base_lin_vel=np.zeros(3),
+        )
+
+    def cycle(self) -> None:
+        """One exchange with every motor, then the feedback checks."""
+        self.cycles += 1
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            raise LifecycleError(f"cycle needs a configured robot, it is {self.state.value}")
+        if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
+            self._exchange(limp=False, command=self._next_command())
+        elif self.state is Lifecycle.ERROR:
+            self._exchange(limp=False, damping=True)
+        else:
+            self._exchange(limp=True)
+        self._update_state()
+        if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
+            faults = self._check_feedback()
+            if faults:
+                self._enter_error(faults)
+
+    def _next_command(self) -> JointCommand:
+        safety = self.cfg.safety
+        if self.state is Lifecycle.ACTIVATING and self._ramp is not None:
+            start_t, start_q = self._ramp
+            alpha = min((self.stamp_clock() - start_t) / max(safety.soft_start_time, 1e-9), 1.0)
+            q = start_q + alpha * (self.default_pose - start_q)
+            kp = np.array([self.cfg.joints[n].kp for n in self._names])
+            kd = np.array([self.cfg.joints[n].kd for n in self._names])
+            cmd = JointCommand(q=q, dq=self._zeros, kp=kp, kd=kd, tau_ff=self._zeros)
+            if alpha >= 1.0:
+                self.state = Lifecycle.ACTIVE
+                self._ramp = None
+                self._command = cmd
+        elif self._command is None:
+            return self._hold_command()
+        else:
+            cmd = self._command
+        limited, changed = limit_command(cmd, self.limits, self._sent_q, safety.max_position_step)
+        self.clamped_values += changed
+        self._sent_q = limited.q
+        return limited
+
+    def _hold_command(self) -> JointCommand:
+        q = self._sent_q if self._sent_q is not None else self._q
+        return JointCommand(
+            q=q, dq=self._zeros, kp=np.array([self.cfg.joints[n].kp for n in self._names]), kd=self._damp_kd, tau_ff=self._zeros
+        )
+
+    def _exchange(self, limp: bool, damping: bool = False, command: JointCommand | None = None, timeout: float | None = None) -> None:
+        per_driver: dict[str, dict[int, MotorCommand]] = {name: {} for name in self._drivers}
+        for i, slot in enumerate(self._slots):
+            if command is not None:
+                c = joint_to_motor(slot.joint, command.q[i], command.dq[i], command.kp[i], command.kd[i], command.tau_ff[i])
+            elif damping:
+                c = joint_to_motor(slot.joint, self._q[i], 0.0, 0.0, float(self._damp_kd[i]), 0.0)
+            else:
+                c = MotorCommand(q=0.0, dq=0.0, kp=0.0, kd=0.0, tau=0.0)
+            per_driver[slot.joint.bus][slot.motor_id] = c
+        for name, driver in self._drivers.items():
+            if isinstance(driver, Rs485BusDriver):
+                driver.send_commands(per_driver[name], mode=rs485.MODE_BRAKE if limp else rs485.MODE_FOC)
+            else:
+                driver.send_commands(per_driver[name])
+        deadline = time.monotonic() + (timeout if timeout is not None else self.cfg.safety.cycle_timeout)
+        serial_drivers = [d for d in self._drivers.values() if isinstance(d, Rs485BusDriver)]
+        while serial_drivers:  # RS-485 ports in parallel: one frame out on each, then each reply
+            serial_drivers = [d for d in serial_drivers if d.write_next(deadline)]
+            for driver in serial_drivers:
+                driver.read_pending()
+        for driver in self._drivers.values():
+            if isinstance(driver, MitBusDriver):
+                driver.collect(deadline)
+        if self.imu is not None:
+            self.imu.poll()
+
+    def _update_state(self) -> None:
+        for i, slot in enumerate(self._slots):
+            fb = slot.driver.feedback[slot.motor_id]
+            if fb.stamp is not None:
+                self._q[i], self._dq[i], self._tau[i] = motor_to_joint(slot.joint, fb.position, fb.velocity, fb.torque)
+
+    def _check_feedback(self) -> list[str]:
+        now = self.stamp_clock()
+        fbs: list[MotorFeedback] = [s.driver.feedback[s.motor_id] for s in self._slots]
+        faults = feedback_faults(
+            self._names,
+            [f.stamp for f in fbs],
+            [f.missed for f in fbs],
+            [(f.faulted, f.error) for f in fbs],
+            [f.temperature for f in fbs],
+            now,
+            self.cfg.safety,
+        )
+        faults += [d.bus_fault for d in self._drivers.values() if d.bus_fault]
+        if self.imu is not None and self.cfg.imu is not None:
+            if self.imu.port_fault:
+                faults.append(self.imu.port_fault)
+            elif self.imu.age(now) > self.cfg.imu.timeout:
+                age = self.imu.age(now)
+                faults.append(f"IMU stale ({'no frame yet' if math.isinf(age) else f'last frame {1e3 * age:.0f} ms ago'})")
+        return faults
+
+    def _enter_error(self, faults: list[str]) -> None:
+        if self.state is not Lifecycle.ERROR:
+            log.error("hardware fault, damping all joints: %s", "; ".join(faults))
+            self.fault_count += 1
+            self.faults = faults
+        self.state = Lifecycle.ERROR
+        self._command = None
+        if self._drivers:
+            self._exchange(limp=False, damping=True)
+
+    # -- reporting -------------------------------------------------------------------
+    def counters(self) -> BusCounters:
+        total = BusCounters()
+        total.add(self._closed_counters)
+        for driver in self._drivers.values():
+            total.add(driver.counters)
+        if self.imu is not None:
+            total.crc_errors += self.imu.counters.crc_errors
+            total.bad_frames += self.imu.counters.bad_frames
+        return total
+
+    def feedback(self, name: str) -> MotorFeedback:
+        slot = self._slots[self._names.index(name)]
+        return slot.driver.feedback[slot.motor_id]
+
+    # -- shutdown --------------------------------------------------------------------
+    def _shutdown(self) -> None:
+        try:
+            self.deactivate()
+        except (BusError, OSError) as exc:  # the bus may already be gone; damping was attempted first
+            log.error("deactivate during close failed: %s", exc)
+        finally:
+            self._close_buses()
+            self.state = Lifecycle.CLOSED
+
+    def _close_buses(self) -> None:
+        self._closed_counters = self.counters()
+        for driver in self._drivers.values():
+            driver.close()
+        if self.imu is not None:
+            self.imu.close()
+        self._drivers, self._slots, self.imu = {}, [], None
