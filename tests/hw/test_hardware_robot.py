@@ -1,0 +1,258 @@
+"""Lifecycle and fault drills of the hardware robot against simulated hardware, byte for byte.
+
+Each drill ends in damping on every joint with the fault named, and the commands the
+motors receive never leave the joint map's limits.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import can
+import numpy as np
+import pytest
+
+from hw import g1
+from hw.emulation.faults import FaultPlan
+from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
+from hw.hardware_robot import HardwareRobot, Lifecycle
+from hw.jointmap import BusConfig, HardwareConfig, load_hardware_config
+from hw.types import JointCommand
+from sim.hardware_twin import MuJoCoPlant, SimulatedHardware
+from sim.robot import SimRobot
+
+N = g1.NUM_JOINTS
+
+
+class RecordingPlant(MuJoCoPlant):
+    """Records every PD law the emulated motors apply (joint side)."""
+
+    def __init__(self, robot: SimRobot) -> None:
+        super().__init__(robot)
+        self.applied: list[tuple[str, float, float, float]] = []
+
+    def set_joint_command(self, joint: str, q: float, dq: float, kp: float, kd: float, tau: float) -> None:
+        self.applied.append((joint, q, kp, kd))
+        super().set_joint_command(joint, q, dq, kp, kd, tau)
+
+
+def fast_config(name: str) -> HardwareConfig:
+    cfg = load_hardware_config(name)
+    return dataclasses.replace(cfg, safety=dataclasses.replace(cfg.safety, soft_start_time=0.02, cycle_timeout=0.02))
+
+
+@contextmanager
+def rig(g1_model, name: str = "sim-can", host_cfg=None) -> Iterator[tuple[HardwareRobot, SimulatedHardware, RecordingPlant]]:
+    plant = RecordingPlant(SimRobot(g1_model))
+    cfg = fast_config(name)
+    with SimulatedHardware(cfg, plant) as twin:
+        host = HardwareRobot(host_cfg(twin.host_config) if host_cfg else twin.host_config, stamp_clock=plant.time)
+        try:
+            yield host, twin, plant
+        finally:
+            host.close()
+            plant.robot.close()
+
+
+def run_cycles(host: HardwareRobot, twin: SimulatedHardware, n: int) -> None:
+    for _ in range(n):
+        host.cycle()
+        twin.step()
+
+
+def activate(host: HardwareRobot, twin: SimulatedHardware) -> None:
+    host.configure()
+    twin.step()
+    host.activate()
+    while host.state is Lifecycle.ACTIVATING:
+        run_cycles(host, twin, 1)
+    assert host.state is Lifecycle.ACTIVE
+
+
+def assert_damped(plant: RecordingPlant, host: HardwareRobot, limp: tuple[str, ...] = ()) -> None:
+    """Every joint damped, except motors whose own firmware went limp on a latched error."""
+    last = {joint: (kp, kd) for joint, _, kp, kd in plant.applied}
+    assert len(last) == N
+    for joint in limp:
+        assert last.pop(joint) == (0.0, 0.0)
+    for joint, (kp, kd) in last.items():
+        assert kp == pytest.approx(0.0, abs=1e-9), joint
+        assert kd == pytest.approx(host.cfg.safety.damping_kd, rel=0.02), joint
+
+
+def assert_within_limits(plant: RecordingPlant, host: HardwareRobot) -> None:
+    for joint, q, kp, _ in plant.applied:
+        if kp > 0:
+            lo, hi = host.cfg.joints[joint].position_limits
+            assert lo - 1e-3 <= q <= hi + 1e-3, (joint, q)
+
+
+@pytest.mark.parametrize("name", ["sim-can", "sim-mixed"])
+def test_lifecycle_soft_start_reaches_default_pose(g1_model, name: str) -> None:
+    with rig(g1_model, name) as (host, twin, plant):
+        with pytest.raises(LifecycleError):
+            host.activate()
+        activate(host, twin)
+        run_cycles(host, twin, 5)
+        assert np.abs(host.read().joint_pos - host.default_pose).max() < 0.1
+        counters = host.counters()
+        assert counters.frames_received > 0 and counters.crc_errors == 0
+        host.deactivate()
+        assert host.state is Lifecycle.INACTIVE
+        assert_within_limits(plant, host)
+
+
+def test_reply_drop_drill(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        twin.faults["can0"].drop_reply_prob = 1.0
+        run_cycles(host, twin, 30)
+        assert host.state is Lifecycle.ERROR
+        assert any("left_hip_pitch_joint" in f and ("missed" in f or "watchdog" in f) for f in host.faults)
+        assert host.counters().dropped >= 5
+        twin.faults["can0"].drop_reply_prob = 0.0
+        run_cycles(host, twin, 3)
+        assert_damped(plant, host)
+
+
+def test_bus_off_drill(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        twin.faults["can1"].bus_off = True
+        run_cycles(host, twin, 5)
+        assert host.state is Lifecycle.ERROR
+        assert any("can1" in f and "error frame" in f for f in host.faults)
+        assert host.counters().error_frames >= 1
+        twin.faults["can1"].bus_off = False
+        run_cycles(host, twin, 3)
+        assert_damped(plant, host)
+
+
+def test_over_temperature_drill(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        knee_id = host.cfg.joints["left_knee_joint"].id
+        twin.faults["can0"].over_temperature = {knee_id}
+        run_cycles(host, twin, 3)
+        assert host.state is Lifecycle.ERROR
+        assert any("left_knee_joint" in f and "temperature" in f for f in host.faults)
+        twin.faults["can0"].over_temperature = set()
+        run_cycles(host, twin, 3)
+        assert_damped(plant, host, limp=("left_knee_joint",))
+        with pytest.raises(HardwareFault, match="left_knee_joint"):
+            host.rearm()  # the motor still reports hot: no re-arm
+
+
+def test_stale_imu_drill(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        twin.faults["imu"].silent = True
+        run_cycles(host, twin, 40)
+        assert host.state is Lifecycle.ERROR
+        assert any("IMU stale" in f for f in host.faults)
+        run_cycles(host, twin, 2)
+        assert_damped(plant, host)
+        twin.faults["imu"].silent = False
+        run_cycles(host, twin, 2)
+        host.rearm()
+        assert host.state is Lifecycle.INACTIVE
+
+
+def test_nan_target_drill(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        bad = JointCommand(q=np.full(N, np.nan), dq=np.zeros(N), kp=np.full(N, 40.0), kd=np.ones(N), tau_ff=np.zeros(N))
+        host.write(bad)
+        run_cycles(host, twin, 2)
+        assert host.state is Lifecycle.ERROR and "non-finite" in host.faults[0]
+        assert_damped(plant, host)
+        assert all(np.isfinite(q) for _, q, _, _ in plant.applied)
+
+
+def test_out_of_limit_commands_are_clamped_and_step_limited(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        start = len(plant.applied)
+        wild = JointCommand(q=np.full(N, 10.0), dq=np.full(N, 1e3), kp=np.full(N, 40.0), kd=np.ones(N), tau_ff=np.full(N, 1e4))
+        host.write(wild)
+        run_cycles(host, twin, 1)
+        knee = [q for joint, q, kp, _ in plant.applied[start:] if joint == "left_knee_joint" and kp > 0]
+        assert knee and knee[-1] <= g1.DEFAULT_JOINT_POS["left_knee_joint"] + host.cfg.safety.max_position_step + 1e-3
+        run_cycles(host, twin, 30)
+        assert_within_limits(plant, host)
+        assert host.clamped_values > 0
+
+
+def test_rs485_crc_errors_are_counted_then_fault(g1_model) -> None:
+    with rig(g1_model, "sim-mixed") as (host, twin, plant):
+        activate(host, twin)
+        twin.faults["rs485_left"].corrupt_prob = 1.0
+        run_cycles(host, twin, 10)
+        assert host.counters().crc_errors >= 6
+        assert host.state is Lifecycle.ERROR
+        assert any("left_" in f for f in host.faults)
+        twin.faults["rs485_left"].corrupt_prob = 0.0
+        run_cycles(host, twin, 2)
+        assert_damped(plant, host)
+
+
+def test_motor_error_code_is_decoded_and_named(g1_model) -> None:
+    with rig(g1_model, "sim-mixed") as (host, twin, _plant):
+        activate(host, twin)
+        twin.faults["rs485_right"].error_codes = {host.cfg.joints["right_knee_joint"].id: 4}
+        run_cycles(host, twin, 2)
+        assert host.state is Lifecycle.ERROR
+        assert any("right_knee_joint" in f and "encoder fault" in f for f in host.faults)
+
+
+def test_missing_motor_is_named_at_configure(g1_model) -> None:
+    def wrong_id(cfg: HardwareConfig) -> HardwareConfig:
+        joints = dict(cfg.joints)
+        joints["left_knee_joint"] = dataclasses.replace(joints["left_knee_joint"], id=44)
+        return dataclasses.replace(cfg, joints=joints)
+
+    with rig(g1_model, host_cfg=wrong_id) as (host, _twin, _plant):
+        with pytest.raises(MotorNotFoundError, match=r"left_knee_joint \(bus can0, id 44\)"):
+            host.configure()
+        assert host.state is Lifecycle.UNCONFIGURED
+
+
+def test_unknown_id_and_wrong_length_frames_are_counted(g1_model) -> None:
+    with rig(g1_model) as (host, twin, _plant):
+        activate(host, twin)
+        intruder = can.Bus(interface="virtual", channel=twin.host_config.buses["can3"].channel)
+        intruder.send(can.Message(arbitration_id=0x63, data=bytes([0x63, 0, 0, 0, 0, 0, 0, 0]), is_extended_id=False))
+        intruder.send(can.Message(arbitration_id=0x01, data=bytes(3), is_extended_id=False))
+        run_cycles(host, twin, 1)
+        intruder.shutdown()
+        counters = host.counters()
+        assert counters.unknown_ids == 1 and counters.bad_frames == 1
+        assert host.state is Lifecycle.ACTIVE  # counted, the loop goes on
+
+
+def test_bus_that_does_not_open_is_named() -> None:
+    cfg = load_hardware_config("sim-mixed")
+    buses = dict(cfg.buses)
+    buses["rs485_left"] = BusConfig(kind="serial", port="/dev/ttyG1-missing")
+    host = HardwareRobot(dataclasses.replace(cfg, buses=buses))
+    with pytest.raises(BusError, match=r"serial port 'rs485_left' \(/dev/ttyG1-missing\)"):
+        host.configure()
+    host.close()
+    host.close()
+
+
+def test_unknown_can_interface_is_named() -> None:
+    cfg = load_hardware_config("sim-can")
+    buses = dict(cfg.buses)
+    buses["can0"] = BusConfig(kind="can", interface="nosuchcan", channel="x")
+    host = HardwareRobot(dataclasses.replace(cfg, buses=buses))
+    with pytest.raises(BusError, match=r"CAN bus 'can0' \(nosuchcan:x\)"):
+        host.configure()
+    host.close()
+
+
+def test_faults_from_a_fault_plan_are_seeded() -> None:
+    a, b = FaultPlan(drop_reply_prob=0.5, seed=3), FaultPlan(drop_reply_prob=0.5, seed=3)
+    assert [a.drop() for _ in range(20)] == [b.drop() for _ in range(20)]
