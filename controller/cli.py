@@ -6,6 +6,7 @@ Usage:
               [--input scripted|keyboard|gamepad] [--hardware sim-can|sim-mixed|PATH] [--progress]
     g1ctl assets fetch [--assets-dir DIR]
     g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
+    g1ctl bench hw [--report PATH] [--seconds 60]
     g1ctl scenarios            (list the shipped scenarios and policies)
 
 Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
@@ -58,6 +59,11 @@ def _build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
     loop.add_argument("--duration", type=float, default=20.0)
 
+    hw_bench = bench_sub.add_parser("hw", help="host bus cycle at 500 Hz against a raw python-can round trip")
+    hw_bench.add_argument("--report", type=Path, default=None)
+    hw_bench.add_argument("--seconds", type=float, default=60.0)
+    hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
+
     sub.add_parser("scenarios", help="list shipped scenarios and policy presets")
     return parser
 
@@ -82,6 +88,11 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         found = ensure_assets(args.assets_dir)
         print(found.root)
+        return 0
+    if args.command == "bench" and args.bench_command == "hw":
+        from controller.bench_hw import run_hw_bench  # noqa: PLC0415
+
+        _emit(run_hw_bench(args.seconds, args.raw_seconds), args.report)
         return 0
     if args.command == "bench":
         from controller.bench import run_loop_bench  # noqa: PLC0415

@@ -13,10 +13,11 @@ import time
 from typing import Any
 
 from controller.metrics import percentiles_ms
+from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import load_hardware_config
 from hw.robot import RobotInterface
-from sim.hardware_twin import MuJoCoPlant, SimulatedHardware
+from sim.hardware_twin import MuJoCoPlant
 from sim.robot import SimRobot
 
 # The simulated robot starts in the default pose, so the soft start has nothing to ramp;

@@ -91,6 +91,8 @@ class MitBusDriver(_Driver):
         self.bus = bus
         self.motors = {m.motor_id: m for m in motors}
         self._awaiting: set[int] = set()
+        # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
+        self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
 
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
@@ -137,7 +139,7 @@ class MitBusDriver(_Driver):
         if len(data) not in (6, 8):
             self.counters.bad_frames += 1
             return
-        motor_id = self._reply_id(data)
+        motor_id = data[0] & self._id_mask
         motor = self.motors.get(motor_id)
         if motor is None:
             self.counters.unknown_ids += 1
@@ -153,10 +155,6 @@ class MitBusDriver(_Driver):
         fb.temperature, fb.error_code, fb.error, fb.faulted = reply.temperature, reply.error_code, reply.error, reply.faulted
         fb.stamp, fb.missed = self._now(), 0
         self._awaiting.discard(motor_id)
-
-    def _reply_id(self, data: bytes) -> int:
-        variants = {m.reply for m in self.motors.values()}
-        return data[0] & 0x0F if variants == {"damiao"} else data[0]
 
     def close(self) -> None:
         self.bus.shutdown()

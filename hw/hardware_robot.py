@@ -136,6 +136,9 @@ class HardwareRobot(RobotInterface):
             self._slots.extend(_Slot(name, j, driver, j.id) for name, j in joints)
         order = {name: i for i, name in enumerate(self._names)}
         self._slots.sort(key=lambda s: order[s.name])
+        self._sign = np.array([s.joint.direction for s in self._slots], float)
+        self._gear = np.array([s.joint.gear_ratio for s in self._slots])
+        self._offset = np.array([s.joint.zero_offset for s in self._slots])
         if self.cfg.imu is not None:
             bus_cfg = self.cfg.buses[self.cfg.imu.bus]
             self.imu = SerialImu(self.cfg.imu.bus, open_serial(self.cfg.imu.bus, bus_cfg), self.stamp_clock)
@@ -261,15 +264,20 @@ class HardwareRobot(RobotInterface):
         )
 
     def _exchange(self, limp: bool, damping: bool = False, command: JointCommand | None = None, timeout: float | None = None) -> None:
+        n = len(self._slots)
+        if command is not None:
+            q, dq, kp, kd, tau = command.q, command.dq, command.kp, command.kd, command.tau_ff
+        elif damping:
+            q, dq, kp, kd, tau = self._q, self._zeros, self._zeros, self._damp_kd, self._zeros
+        else:
+            q = dq = kp = kd = tau = np.zeros(n)
+        # Joint side -> motor side for every joint at once (see `joint_to_motor`).
+        s, g, off = self._sign, self._gear, self._offset
+        mq = (s * (q - off) * g).tolist() if command is not None or damping else [0.0] * n
+        mdq, mkp, mkd, mtau = (s * dq * g).tolist(), (kp / (g * g)).tolist(), (kd / (g * g)).tolist(), (s * tau / g).tolist()
         per_driver: dict[str, dict[int, MotorCommand]] = {name: {} for name in self._drivers}
         for i, slot in enumerate(self._slots):
-            if command is not None:
-                c = joint_to_motor(slot.joint, command.q[i], command.dq[i], command.kp[i], command.kd[i], command.tau_ff[i])
-            elif damping:
-                c = joint_to_motor(slot.joint, self._q[i], 0.0, 0.0, float(self._damp_kd[i]), 0.0)
-            else:
-                c = MotorCommand(q=0.0, dq=0.0, kp=0.0, kd=0.0, tau=0.0)
-            per_driver[slot.joint.bus][slot.motor_id] = c
+            per_driver[slot.joint.bus][slot.motor_id] = MotorCommand(mq[i], mdq[i], mkp[i], mkd[i], mtau[i])
         for name, driver in self._drivers.items():
             if isinstance(driver, Rs485BusDriver):
                 driver.send_commands(per_driver[name], mode=rs485.MODE_BRAKE if limp else rs485.MODE_FOC)

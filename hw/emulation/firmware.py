@@ -1,4 +1,12 @@
-"""Firmware emulators: MIT-mode motors on a CAN bus, GO-M8010-style motors on RS-485, a serial IMU."""
+"""Firmware emulators: MIT-mode motors on a CAN bus, GO-M8010-style motors on RS-485, a serial IMU.
+
+Like real motor firmware, an emulator works in two places. Its receive thread answers
+each frame at once with the status sampled at the last control tick and files the
+command away; `tick()` (called once per physics step) is the control loop: it decodes
+the newest command exactly as the firmware would (quantization included), runs the
+watchdog and the thermal model, pushes the PD law into the plant and samples the status
+the next replies carry.
+"""
 
 from __future__ import annotations
 
@@ -35,9 +43,26 @@ class _Emulator:
         self._thread = threading.Thread(target=self._serve, name=f"emulator-{name}", daemon=True)
 
     def start(self) -> None:
+        self.sample()  # a first status before answering anything
         self._thread.start()
 
     def _serve(self) -> None:
+        raise NotImplementedError
+
+    def tick(self) -> None:
+        """Control step, before physics: apply the newest commands."""
+        raise NotImplementedError
+
+    def sample(self) -> None:
+        """After physics: sample the status every reply until the next sample carries."""
+        with self.plant.lock:
+            for motor_id in self.motor_ids():
+                self._sample(motor_id)
+
+    def motor_ids(self) -> list[int]:
+        raise NotImplementedError
+
+    def _sample(self, motor_id: int) -> None:
         raise NotImplementedError
 
     def close(self) -> None:
@@ -60,51 +85,76 @@ class MitBusEmulator(_Emulator):
         super().__init__(name, plant, faults)
         self.bus = bus
         self.motors = motors
+        self._pending: dict[int, bytes] = {}  # newest command frame per motor, decoded at the next tick
+        self._status: dict[int, can.Message] = {}  # reply per motor, sampled at the last tick
         self._bus_off_sent = False
 
     def _serve(self) -> None:
+        bus, motors, faults, pending, status = self.bus, self.motors, self.faults, self._pending, self._status
         while self._running:
-            msg = self.bus.recv(timeout=0.05)
-            if msg is None or msg.is_error_frame or msg.arbitration_id not in self.motors:
+            msg = bus.recv(timeout=0.05)
+            if msg is None or msg.is_error_frame or msg.arbitration_id not in motors:
                 continue
             self.frames_in += 1
-            if self.faults.bus_off:
+            motor_id, data = msg.arbitration_id, bytes(msg.data)
+            if faults.bus_off:
                 if not self._bus_off_sent:
-                    self.bus.send(can.Message(is_error_frame=True, arbitration_id=0x20000004, data=bytes(8), is_extended_id=True))
+                    bus.send(can.Message(is_error_frame=True, arbitration_id=0x20000004, data=bytes(8), is_extended_id=True))
                     self._bus_off_sent = True
                 continue
-            reply = self._handle(msg.arbitration_id, bytes(msg.data))
-            if reply is None or self.faults.drop():
+            if len(data) != 8:
+                continue  # the firmware ignores malformed frames
+            if data[:7] == b"\xff" * 7:
+                self._special(motor_id, data)
+            else:
+                pending[motor_id] = data
+            if faults.drop_reply_prob and faults.drop():
                 continue
-            if self.faults.delay_reply_s:
-                time.sleep(self.faults.delay_reply_s)
-            self.bus.send(can.Message(arbitration_id=msg.arbitration_id, data=self.faults.corrupt(reply), is_extended_id=False))
+            if faults.delay_reply_s:
+                time.sleep(faults.delay_reply_s)
+            reply = status[motor_id]
+            if faults.corrupt_prob:
+                reply = can.Message(arbitration_id=motor_id, data=faults.corrupt(bytes(reply.data)), is_extended_id=False)
+            bus.send(reply)
             self.frames_out += 1
 
-    def _handle(self, motor_id: int, data: bytes) -> bytes | None:
-        motor, ranges, variant = self.motors[motor_id]
-        over_temp_code = DAMIAO_COIL_OVER_TEMPERATURE if variant == "damiao" else CUBEMARS_OVER_TEMPERATURE
+    def _special(self, motor_id: int, data: bytes) -> None:
+        motor = self.motors[motor_id][0]
+        kind = mit.SPECIAL_FRAMES.get(data)
         with self.plant.lock:
-            if len(data) != 8:
-                return None  # the firmware ignores malformed frames
-            special = mit.SPECIAL_FRAMES.get(data)
-            command = None
-            if special == "enter":
+            if kind == "enter":
                 motor.enabled, motor.error_code = True, 0  # re-entering motor mode clears a latched error
-            elif special == "exit":
+            elif kind == "exit":
                 motor.enabled = False
-            elif special == "zero":
+                self._pending.pop(motor_id, None)
+            elif kind == "zero":
                 motor.set_zero(self.plant)
-            else:
-                c = mit.decode_command(ranges, data)  # quantized exactly as the firmware sees it
-                command = MotorCommand(q=c.position, dq=c.velocity, kp=c.kp, kd=c.kd, tau=c.torque)
-            self._inject(motor_id, motor, over_temp_code)
-            motor.apply(self.plant, command, over_temp_code, motor_id in self.faults.stuck)
-            position, velocity, torque = motor.reading(self.plant)
+            self._sample(motor_id)
+
+    def tick(self) -> None:
+        with self.plant.lock:
+            for motor_id, (motor, ranges, variant) in self.motors.items():
+                data = self._pending.pop(motor_id, None)
+                command = None
+                if data is not None:
+                    c = mit.decode_command(ranges, data)  # quantized exactly as the firmware sees it
+                    command = MotorCommand(q=c.position, dq=c.velocity, kp=c.kp, kd=c.kd, tau=c.torque)
+                code = DAMIAO_COIL_OVER_TEMPERATURE if variant == "damiao" else CUBEMARS_OVER_TEMPERATURE
+                self._inject(motor_id, motor, code)
+                motor.apply(self.plant, command, code, motor_id in self.faults.stuck)
+
+    def motor_ids(self) -> list[int]:
+        return list(self.motors)
+
+    def _sample(self, motor_id: int) -> None:
+        motor, ranges, variant = self.motors[motor_id]
+        position, velocity, torque = motor.reading(self.plant)
         if variant == "damiao":
             state = motor.error_code or (1 if motor.enabled else 0)
-            return mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, motor.temperature, state)
-        return mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, error_code=motor.error_code)
+            data = mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, motor.temperature, state)
+        else:
+            data = mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, error_code=motor.error_code)
+        self._status[motor_id] = can.Message(arbitration_id=motor_id, data=data, is_extended_id=False)
 
     def _inject(self, motor_id: int, motor: EmulatedMotor, over_temp_code: int) -> None:
         if motor_id in self.faults.error_codes:
@@ -112,13 +162,6 @@ class MitBusEmulator(_Emulator):
         if motor_id in self.faults.over_temperature:
             motor.temperature = max(motor.temperature, 120.0)
             motor.error_code = motor.error_code or over_temp_code
-
-    def tick(self) -> None:
-        """Per physics step: enforce each motor's command watchdog."""
-        with self.plant.lock:
-            for motor_id, (motor, _, variant) in self.motors.items():
-                code = DAMIAO_COIL_OVER_TEMPERATURE if variant == "damiao" else CUBEMARS_OVER_TEMPERATURE
-                motor.apply(self.plant, None, code, motor_id in self.faults.stuck)
 
     def close(self) -> None:
         super().close()
@@ -134,6 +177,9 @@ class Rs485PortEmulator(_Emulator):
         self.motors = motors
         self.crc_errors = 0
         self._splitter = rs485.FrameSplitter(rs485.COMMAND_HEADER, rs485.COMMAND_SIZE)
+        self._pending: dict[int, rs485.MotorCommand] = {}
+        self._mode: dict[int, int] = dict.fromkeys(motors, rs485.MODE_BRAKE)
+        self._status: dict[int, bytes] = {}
 
     def _serve(self) -> None:
         while self._running:
@@ -153,30 +199,20 @@ class Rs485PortEmulator(_Emulator):
         except rs485.FrameError:
             self.crc_errors += 1  # the firmware drops a frame that fails its CRC
             return
-        motor = self.motors.get(cmd.motor_id)
-        if motor is None:
+        if cmd.motor_id not in self.motors:
             return  # another motor's id, or broadcast: no reply
         self.frames_in += 1
-        with self.plant.lock:
-            if cmd.motor_id in self.faults.error_codes:
-                motor.error_code = self.faults.error_codes.pop(cmd.motor_id)
-            if cmd.motor_id in self.faults.over_temperature:
-                motor.temperature, motor.error_code = max(motor.temperature, 120.0), motor.error_code or RS485_OVERHEAT
-            if cmd.mode == rs485.MODE_BRAKE:
-                motor.enabled, motor.error_code = False, 0
-                command = None
-            else:
-                motor.enabled = True
-                command = MotorCommand(q=cmd.position, dq=cmd.speed, kp=cmd.kp, kd=cmd.kd, tau=cmd.torque)
-            motor.apply(self.plant, command, RS485_OVERHEAT, cmd.motor_id in self.faults.stuck)
-            position, velocity, torque = motor.reading(self.plant)
-        if self.faults.drop():
+        self._pending[cmd.motor_id] = cmd
+        if self._mode[cmd.motor_id] != cmd.mode:
+            with self.plant.lock:
+                self._mode[cmd.motor_id] = cmd.mode
+                self._sample(cmd.motor_id)
+        if self.faults.drop_reply_prob and self.faults.drop():
             return
         if self.faults.delay_reply_s:
             time.sleep(self.faults.delay_reply_s)
-        reply = rs485.encode_reply(cmd.motor_id, cmd.mode, torque, velocity, position, round(motor.temperature), motor.error_code)
         try:
-            os.write(self.fd, self.faults.corrupt(reply))
+            os.write(self.fd, self.faults.corrupt(self._status[cmd.motor_id]))
             self.frames_out += 1
         except OSError:
             return
@@ -184,7 +220,28 @@ class Rs485PortEmulator(_Emulator):
     def tick(self) -> None:
         with self.plant.lock:
             for motor_id, motor in self.motors.items():
-                motor.apply(self.plant, None, RS485_OVERHEAT, motor_id in self.faults.stuck)
+                cmd = self._pending.pop(motor_id, None)
+                if motor_id in self.faults.error_codes:
+                    motor.error_code = self.faults.error_codes.pop(motor_id)
+                if motor_id in self.faults.over_temperature:
+                    motor.temperature, motor.error_code = max(motor.temperature, 120.0), motor.error_code or RS485_OVERHEAT
+                command = None
+                if cmd is not None and cmd.mode == rs485.MODE_BRAKE:
+                    motor.enabled, motor.error_code = False, 0  # brake clears a latched error
+                elif cmd is not None:
+                    motor.enabled = True
+                    command = MotorCommand(q=cmd.position, dq=cmd.speed, kp=cmd.kp, kd=cmd.kd, tau=cmd.torque)
+                motor.apply(self.plant, command, RS485_OVERHEAT, motor_id in self.faults.stuck)
+
+    def motor_ids(self) -> list[int]:
+        return list(self.motors)
+
+    def _sample(self, motor_id: int) -> None:
+        motor = self.motors[motor_id]
+        position, velocity, torque = motor.reading(self.plant)
+        self._status[motor_id] = rs485.encode_reply(
+            motor_id, self._mode[motor_id], torque, velocity, position, round(motor.temperature), motor.error_code
+        )
 
 
 class ImuEmulator:
@@ -209,6 +266,3 @@ class ImuEmulator:
             os.write(self.fd, self.faults.corrupt(imu_frame.encode_imu(sample)))
         except BlockingIOError:
             self.overflows += 1  # nobody reads: the frame is lost, as on a real UART
-
-    def close(self) -> None:
-        pass

@@ -100,22 +100,15 @@ def uint_to_float(u: int, lo: float, hi: float, bits: int) -> float:
 
 
 def encode_command(r: MitRanges, position: float, velocity: float, kp: float, kd: float, torque: float) -> bytes:
-    p = float_to_uint(position, -r.p_max, r.p_max, 16)
-    v = float_to_uint(velocity, -r.v_max, r.v_max, 12)
-    kp_u = float_to_uint(kp, 0.0, r.kp_max, 12)
-    kd_u = float_to_uint(kd, 0.0, r.kd_max, 12)
-    t = float_to_uint(torque, -r.t_max, r.t_max, 12)
+    # `float_to_uint` written out for each field: this runs for every motor at 500 Hz.
+    pm, vm, tm = r.p_max, r.v_max, r.t_max
+    p = int((min(max(position, -pm), pm) + pm) * 65535 / (2 * pm))
+    v = int((min(max(velocity, -vm), vm) + vm) * 4095 / (2 * vm))
+    kp_u = int(min(max(kp, 0.0), r.kp_max) * 4095 / r.kp_max)
+    kd_u = int(min(max(kd, 0.0), r.kd_max) * 4095 / r.kd_max)
+    t = int((min(max(torque, -tm), tm) + tm) * 4095 / (2 * tm))
     return bytes(
-        (
-            p >> 8,
-            p & 0xFF,
-            v >> 4,
-            ((v & 0xF) << 4) | (kp_u >> 8),
-            kp_u & 0xFF,
-            kd_u >> 4,
-            ((kd_u & 0xF) << 4) | (t >> 8),
-            t & 0xFF,
-        )
+        (p >> 8, p & 0xFF, v >> 4, ((v & 0xF) << 4) | (kp_u >> 8), kp_u & 0xFF, kd_u >> 4, ((kd_u & 0xF) << 4) | (t >> 8), t & 0xFF)
     )
 
 
@@ -166,12 +159,10 @@ def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:
     expected = 6 if variant == "basic" else 8
     if len(data) != expected:
         raise ValueError(f"MIT {variant} reply must be {expected} bytes, got {len(data)}")
-    p = (data[1] << 8) | data[2]
-    v = (data[3] << 4) | (data[4] >> 4)
-    t = ((data[4] & 0xF) << 8) | data[5]
-    position = uint_to_float(p, -r.p_max, r.p_max, 16)
-    velocity = uint_to_float(v, -r.v_max, r.v_max, 12)
-    torque = uint_to_float(t, -r.t_max, r.t_max, 12)
+    pm, vm, tm = r.p_max, r.v_max, r.t_max
+    position = ((data[1] << 8) | data[2]) * (2 * pm) / 65535 - pm
+    velocity = ((data[3] << 4) | (data[4] >> 4)) * (2 * vm) / 4095 - vm
+    torque = (((data[4] & 0xF) << 8) | data[5]) * (2 * tm) / 4095 - tm
     if variant == "basic":
         return MitReply(data[0], position, velocity, torque)
     if variant == "cubemars":
@@ -179,13 +170,5 @@ def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:
         code = data[7]
         return MitReply(data[0], position, velocity, torque, float(temp), None, code, CUBEMARS_ERRORS.get(code, f"unknown error {code}"))
     code = data[0] >> 4
-    return MitReply(
-        data[0] & 0x0F,
-        position,
-        velocity,
-        torque,
-        float(data[7]),
-        float(data[6]),
-        code,
-        DAMIAO_STATES.get(code, f"unknown state {code:#x}"),
-    )
+    state = DAMIAO_STATES.get(code, f"unknown state {code:#x}")
+    return MitReply(data[0] & 0x0F, position, velocity, torque, float(data[7]), float(data[6]), code, state)

@@ -16,11 +16,12 @@ import pytest
 
 from hw import g1
 from hw.emulation.faults import FaultPlan
+from hw.emulation.rig import SimulatedHardware
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import BusConfig, HardwareConfig, load_hardware_config
 from hw.types import JointCommand
-from sim.hardware_twin import MuJoCoPlant, SimulatedHardware
+from sim.hardware_twin import MuJoCoPlant
 from sim.robot import SimRobot
 
 N = g1.NUM_JOINTS
