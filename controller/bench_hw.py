@@ -71,7 +71,7 @@ def raw_round_trip(cfg: HardwareConfig, cycles: int) -> tuple[list[float], int]:
             lost = 0
             for name, bus in hosts.items():
                 expected = len(frames[name])
-                while expected and (msg := bus.recv(timeout=max(deadline - time.monotonic(), 0.0))) is not None:
+                while expected and bus.recv(timeout=max(deadline - time.monotonic(), 0.0)) is not None:
                     expected -= 1
                 lost += expected
             elapsed = time.perf_counter() - t0
