@@ -7,6 +7,8 @@ Usage:
     g1ctl assets fetch [--assets-dir DIR]
     g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
     g1ctl bench hw [--report PATH] [--seconds 60]
+    g1ctl hw scan|monitor|zero|sweep|damp|imu --hardware NAME   (bench bring-up, see hw_commands)
+    g1ctl hw frame encode|decode --protocol mit|unitree-rs485 ...
     g1ctl scenarios            (list the shipped scenarios and policies)
 
 Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
@@ -65,6 +67,10 @@ def _build_parser() -> argparse.ArgumentParser:
     hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
 
     sub.add_parser("scenarios", help="list shipped scenarios and policy presets")
+
+    from controller.hw_commands import add_hw_parser  # noqa: PLC0415 - keeps `g1ctl --help` import-light
+
+    add_hw_parser(sub)
     return parser
 
 
@@ -83,6 +89,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "sim":
         return _sim(args)
+    if args.command == "hw":
+        from controller.hw_commands import run_hw  # noqa: PLC0415
+
+        return run_hw(args)
     if args.command == "assets":
         from controller.assets import ensure_assets  # noqa: PLC0415
 

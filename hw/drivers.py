@@ -128,6 +128,9 @@ class MitBusDriver(_Driver):
             self.feedback[motor_id].missed += 1
         self._awaiting.clear()
 
+    def collect_now(self, timeout: float) -> None:
+        self.collect(time.monotonic() + timeout)
+
     def _handle(self, msg: can.Message) -> None:
         if msg.is_error_frame:
             self.counters.error_frames += 1

@@ -92,6 +92,7 @@ class HardwareRobot(RobotInterface):
         self._command: JointCommand | None = None
         self._sent_q: np.ndarray | None = None
         self._ramp: tuple[float, np.ndarray] | None = None
+        self._ramp_target = self.default_pose
         n = len(joint_names)
         self._damp_kd = np.full(n, cfg.safety.damping_kd)
         self._zeros = np.zeros(n)
@@ -104,8 +105,9 @@ class HardwareRobot(RobotInterface):
         return self._names
 
     # -- lifecycle -------------------------------------------------------------------
-    def configure(self) -> None:
-        """Open every bus and port, find every configured motor; fail naming the missing ones."""
+    def configure(self, require_all: bool = True) -> None:
+        """Open every bus and port, find every configured motor; fail naming the missing ones
+        (with `require_all=False`, as `hw scan` does, the missing ones are only left without feedback)."""
         if self.state is not Lifecycle.UNCONFIGURED:
             raise LifecycleError(f"configure needs the robot unconfigured, it is {self.state.value}")
         try:
@@ -114,7 +116,7 @@ class HardwareRobot(RobotInterface):
         except Exception:
             self._close_buses()
             raise
-        if missing:
+        if missing and require_all:
             self._close_buses()
             raise MotorNotFoundError(f"motors did not answer: {', '.join(missing)}; check power, wiring, ids and bitrate")
         self.state = Lifecycle.INACTIVE
@@ -152,8 +154,8 @@ class HardwareRobot(RobotInterface):
         self._exchange(limp=True, timeout=0.05)
         return [f"{s.name} (bus {s.joint.bus}, id {s.motor_id})" for s in self._slots if s.driver.feedback[s.motor_id].stamp is None]
 
-    def activate(self) -> None:
-        """Soft start: from the measured pose, ramp to the default pose over `soft_start_time`."""
+    def activate(self, target_pose: np.ndarray | None = None) -> None:
+        """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
         if self.state is not Lifecycle.INACTIVE:
             raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
         self._exchange(limp=True, timeout=self.cfg.safety.cycle_timeout * 4)
@@ -163,6 +165,7 @@ class HardwareRobot(RobotInterface):
             self._enter_error(faults)
             raise HardwareFault(f"cannot activate: {faults[0]}")
         self._ramp = (self.stamp_clock(), self._q.copy())
+        self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
         self._sent_q = self._q.copy()
         self.state = Lifecycle.ACTIVATING
 
@@ -204,6 +207,17 @@ class HardwareRobot(RobotInterface):
         if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
             self._exchange(limp=False, damping=True)
 
+    def enter_damping(self, reason: str) -> None:
+        """Latch damping on purpose (not a fault): every cycle damps until `rearm()`."""
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            raise LifecycleError(f"damping needs a configured robot, it is {self.state.value}")
+        log.info("damping: %s", reason)
+        self.state, self.faults, self._command = Lifecycle.ERROR, [reason], None
+        self._exchange(limp=False, damping=True)
+
+    def driver_of(self, joint_name: str) -> MitBusDriver | Rs485BusDriver:
+        return self._slots[self._names.index(joint_name)].driver
+
     def read(self) -> RobotState:
         quat, gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
         if self.imu is not None and self.imu.latest is not None:
@@ -240,7 +254,7 @@ class HardwareRobot(RobotInterface):
         if self.state is Lifecycle.ACTIVATING and self._ramp is not None:
             start_t, start_q = self._ramp
             alpha = min((self.stamp_clock() - start_t) / max(safety.soft_start_time, 1e-9), 1.0)
-            q = start_q + alpha * (self.default_pose - start_q)
+            q = start_q + alpha * (self._ramp_target - start_q)
             kp = np.array([self.cfg.joints[n].kp for n in self._names])
             kd = np.array([self.cfg.joints[n].kd for n in self._names])
             cmd = JointCommand(q=q, dq=self._zeros, kp=kp, kd=kd, tau_ff=self._zeros)

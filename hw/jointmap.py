@@ -94,6 +94,7 @@ class HardwareConfig:
     buses: dict[str, BusConfig]
     joints: dict[str, JointConfig]
     description: str = ""
+    simulated: bool = False  # true: emulators stand behind every bus (virtual CAN, sim://pty ports)
     imu: ImuConfig | None = None
     safety: SafetyConfig = field(default_factory=SafetyConfig)
 

@@ -15,7 +15,9 @@ GRAVITY = 9.81
 class MuJoCoPlant:
     """The emulators' view of the simulated G1: joint states and per-joint PD laws."""
 
-    def __init__(self, robot: SimRobot) -> None:
+    def __init__(self, robot: SimRobot, gantry_height: float | None = None) -> None:
+        """`gantry_height`: hang the pelvis this far above its standing height, fixed in
+        space (a bench gantry), so bring-up can move joints without the robot falling."""
         self.robot = robot
         self.lock = threading.RLock()
         names = robot.joint_names
@@ -27,6 +29,10 @@ class MuJoCoPlant:
         self._vadr = [model.jnt_dofadr[model.joint(j).id] for j in names]
         self._aid = [model.actuator(j).id for j in names]
         self._data = data
+        self._gantry: np.ndarray | None = None
+        if gantry_height is not None:
+            data.qpos[2] += gantry_height
+            self._gantry = data.qpos[:7].copy()
         robot.damp()  # limp until the first command arrives: zero gains
         self.robot.write(JointCommand(q=self._q, dq=self._dq, kp=self._kp, kd=self._kd, tau_ff=self._tau))
 
@@ -55,3 +61,6 @@ class MuJoCoPlant:
                 JointCommand(q=self._q.copy(), dq=self._dq.copy(), kp=self._kp.copy(), kd=self._kd.copy(), tau_ff=self._tau.copy())
             )
             self.robot.step(1)
+            if self._gantry is not None:
+                self._data.qpos[:7] = self._gantry
+                self._data.qvel[:6] = 0.0
