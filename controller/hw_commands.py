@@ -16,11 +16,16 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from hw.errors import ConfigError
 
+if TYPE_CHECKING:
+    from hw.hardware_robot import HardwareRobot
 
-def add_hw_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+
+def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     hw = sub.add_parser("hw", help="bench bring-up on real or simulated hardware")
     hw_sub = hw.add_subparsers(dest="hw_command", required=True)
 
@@ -100,7 +105,7 @@ def run_hw(args: argparse.Namespace) -> int:
     raise AssertionError(command)
 
 
-def _monitor(host, pump, seconds: float, refresh: float) -> None:  # type: ignore[no-untyped-def]
+def _monitor(host: HardwareRobot, pump: Callable[[], None], seconds: float, refresh: float) -> None:
     from hw import bringup  # noqa: PLC0415
 
     tty = sys.stdout.isatty()

@@ -6,6 +6,7 @@ hardware; one physics step on simulated hardware), so the same code drives both.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,6 +17,7 @@ import numpy as np
 from hw.drivers import MitBusDriver
 from hw.errors import ConfigError, HardwareFault
 from hw.hardware_robot import HardwareRobot, Lifecycle, motor_to_joint
+from hw.jointmap import JointConfig
 from hw.protocols import mit
 from hw.types import JointCommand
 
@@ -133,7 +135,7 @@ def sweep(
     max_tau = 0.0
     dt = 1.0 / 500.0
     reason = "completed"
-    for a, b in zip(waypoints, waypoints[1:], strict=False):
+    for a, b in itertools.pairwise(waypoints):
         steps = max(int(abs(b - a) / (speed * dt)), 1)
         for k in range(1, steps + 1):
             q[index] = a + (b - a) * k / steps
@@ -186,7 +188,7 @@ def imu_summary(host: HardwareRobot, pump: Pump, seconds: float = 1.0) -> dict[s
     }
 
 
-def _joint(host: HardwareRobot, name: str):  # type: ignore[no-untyped-def]
+def _joint(host: HardwareRobot, name: str) -> JointConfig:
     if name not in host.cfg.joints:
         raise ConfigError(f"unknown joint '{name}' (joints: {', '.join(host.joint_names)})")
     return host.cfg.joints[name]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import abc
 import warnings
 from types import TracebackType
+from typing import Self
 
 from hw.types import JointCommand, RobotState
 
@@ -48,7 +49,7 @@ class RobotInterface(abc.ABC):
         finally:
             self._shutdown()
 
-    def __enter__(self) -> RobotInterface:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
