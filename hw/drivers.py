@@ -1,17 +1,21 @@
 """Motor bus drivers: encode commands, exchange frames on one bus, decode and count replies.
 
 Everything here is on the motor side (rotor units, motor ids); the robot layer converts
-to joints. A driver never raises on a bad frame: it counts it, and the safety layer
-decides. Bus-level failures (bus-off, a port that vanished) are counted and reported
-through `bus_fault`.
+to joints. Commands and feedback are arrays in the driver's motor order, so a 500 Hz
+cycle encodes and decodes a bus in a few vector operations. A driver never raises on a
+bad frame: it counts it, and the safety layer decides. Bus-level failures (an error
+frame, a port that vanished) are reported through `bus_fault`.
 """
 
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import can
+import numpy as np
 import serial
 
 from hw.protocols import mit
@@ -29,19 +33,19 @@ class MotorCommand:
     tau: float
 
 
-@dataclass
+@dataclass(frozen=True)
 class MotorFeedback:
     """Newest reply of one motor (motor side); `stamp` is None until the first reply."""
 
-    position: float = 0.0
-    velocity: float = 0.0
-    torque: float = 0.0
-    temperature: float | None = None
-    error_code: int = 0
-    error: str = "ok"
-    faulted: bool = False
-    stamp: float | None = None
-    missed: int = 0  # consecutive exchanges without a reply
+    position: float
+    velocity: float
+    torque: float
+    temperature: float | None
+    error_code: int
+    error: str
+    faulted: bool
+    stamp: float | None
+    missed: int
 
 
 @dataclass
@@ -67,115 +71,179 @@ class MitMotor:
     reply: mit.ReplyVariant
 
 
-@dataclass
-class _Driver:
-    name: str
-    motor_ids: tuple[int, ...]
-    stamp_clock: object = time.monotonic
-    counters: BusCounters = field(default_factory=BusCounters)
-    feedback: dict[int, MotorFeedback] = field(default_factory=dict)
-    bus_fault: str | None = None
+class BusDriver:
+    """Feedback arrays and counters shared by both protocols."""
 
-    def __post_init__(self) -> None:
-        self.feedback = {i: MotorFeedback() for i in self.motor_ids}
+    def __init__(self, name: str, motor_ids: list[int], stamp_clock: Callable[[], float]) -> None:
+        self.name = name
+        self.motor_ids = tuple(motor_ids)
+        self.index = {motor_id: k for k, motor_id in enumerate(motor_ids)}
+        self.stamp_clock = stamp_clock
+        self.counters = BusCounters()
+        self.bus_fault: str | None = None
+        n = len(motor_ids)
+        self.position = np.zeros(n)
+        self.velocity = np.zeros(n)
+        self.torque = np.zeros(n)
+        self.temperature = np.full(n, np.nan)
+        self.error_code = np.zeros(n, dtype=np.int64)
+        self.faulted = np.zeros(n, dtype=bool)
+        self.stamp = np.full(n, np.nan)
+        self.missed = np.zeros(n, dtype=np.int64)
+        self.error = ["ok"] * n
 
-    def _now(self) -> float:
-        return float(self.stamp_clock())  # type: ignore[operator]
+    def feedback(self, motor_id: int) -> MotorFeedback:
+        k = self.index[motor_id]
+        temp, stamp = float(self.temperature[k]), float(self.stamp[k])
+        return MotorFeedback(
+            float(self.position[k]),
+            float(self.velocity[k]),
+            float(self.torque[k]),
+            None if math.isnan(temp) else temp,
+            int(self.error_code[k]),
+            self.error[k],
+            bool(self.faulted[k]),
+            None if math.isnan(stamp) else stamp,
+            int(self.missed[k]),
+        )
+
+    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool) -> None:
+        raise NotImplementedError
+
+    def collect(self, deadline: float) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError
 
 
-class MitBusDriver(_Driver):
+class MitBusDriver(BusDriver):
     """MIT-mode motors on one CAN bus. Commands go to arbitration id = motor id."""
 
-    def __init__(self, name: str, bus: can.BusABC, motors: list[MitMotor], stamp_clock: object = time.monotonic) -> None:
-        super().__init__(name, tuple(m.motor_id for m in motors), stamp_clock)
+    def __init__(self, name: str, bus: can.BusABC, motors: list[MitMotor], stamp_clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(name, [m.motor_id for m in motors], stamp_clock)
         self.bus = bus
-        self.motors = {m.motor_id: m for m in motors}
-        self._awaiting: set[int] = set()
+        self.motors = motors
+        self._ranges = tuple(np.array([getattr(m.ranges, f) for m in motors]) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max"))
+        self._variants = [m.reply for m in motors]
         # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
-        self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
+        self._id_mask = 0x0F if set(self._variants) == {"damiao"} else 0xFF
+        self._messages = [can.Message(arbitration_id=i, data=bytes(8), is_extended_id=False) for i in self.motor_ids]
+        self._awaiting = np.zeros(len(motors), dtype=bool)
+        self._raw: dict[int, bytes] = {}
 
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
         for motor_id in motor_ids or self.motor_ids:
-            self._send(motor_id, frame)
+            msg = self._messages[self.index[motor_id]]
+            msg.data = bytearray(frame)
+            self._send(self.index[motor_id], msg)
 
-    def send_commands(self, commands: dict[int, MotorCommand]) -> None:
-        for motor_id, c in commands.items():
-            self._send(motor_id, mit.encode_command(self.motors[motor_id].ranges, c.q, c.dq, c.kp, c.kd, c.tau))
+    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool = True) -> None:
+        frames = mit.encode_commands(self._ranges, q, dq, kp, kd, tau).tobytes()  # type: ignore[arg-type]
+        for k, msg in enumerate(self._messages):
+            msg.data = bytearray(frames[8 * k : 8 * k + 8])
+            self._send(k, msg)
 
-    def _send(self, motor_id: int, data: bytes) -> None:
+    def _send(self, k: int, msg: can.Message) -> None:
         try:
-            self.bus.send(can.Message(arbitration_id=motor_id, data=data, is_extended_id=False), timeout=0.001)
+            self.bus.send(msg, timeout=0.001)
         except can.CanError as exc:
             self.counters.send_errors += 1
             self.bus_fault = f"CAN bus '{self.name}' send failed: {exc}"
             return
         self.counters.frames_sent += 1
-        self._awaiting.add(motor_id)
+        self._awaiting[k] = True
 
     def collect(self, deadline: float) -> None:
         """Read replies until every awaited motor answered or the wall-clock `deadline` passes."""
-        while self._awaiting:
-            remaining = deadline - time.monotonic()
-            msg = self.bus.recv(timeout=max(remaining, 0.0))
+        pending = int(self._awaiting.sum())
+        while pending:
+            msg = self.bus.recv(timeout=max(deadline - time.monotonic(), 0.0))
             if msg is None:
                 break
-            self._handle(msg)
+            pending -= self._take(msg)
         while (msg := self.bus.recv(timeout=0.0)) is not None:  # late frames already queued
-            self._handle(msg)
-        for motor_id in self._awaiting:
-            self.counters.dropped += 1
-            self.feedback[motor_id].missed += 1
-        self._awaiting.clear()
+            self._take(msg)
+        self._decode()
+        lost = self._awaiting
+        self.counters.dropped += int(lost.sum())
+        self.missed[lost] += 1
+        lost[:] = False
 
     def collect_now(self, timeout: float) -> None:
         self.collect(time.monotonic() + timeout)
 
-    def _handle(self, msg: can.Message) -> None:
+    def _take(self, msg: can.Message) -> int:
+        """File one frame away; returns 1 when it answered an awaited motor."""
         if msg.is_error_frame:
             self.counters.error_frames += 1
             self.bus_fault = f"CAN bus '{self.name}' reported an error frame (bus-off or wiring fault)"
-            return
-        data = bytes(msg.data)
-        if len(data) == 8 and msg.arbitration_id in self.motors and data[:7] == b"\xff" * 7:
-            return  # another host's special frame echoed on the bus
+            return 0
+        data = msg.data
         if len(data) not in (6, 8):
             self.counters.bad_frames += 1
-            return
-        motor_id = data[0] & self._id_mask
-        motor = self.motors.get(motor_id)
-        if motor is None:
+            return 0
+        if len(data) == 8 and data[0] == 0xFF and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
+            return 0  # another host's special frame on the bus
+        k = self.index.get(data[0] & self._id_mask)
+        if k is None:
             self.counters.unknown_ids += 1
-            return
-        try:
-            reply = mit.decode_reply(motor.ranges, motor.reply, data)
-        except ValueError:
+            return 0
+        expected = 6 if self._variants[k] == "basic" else 8
+        if len(data) != expected:
             self.counters.bad_frames += 1
-            return
+            return 0
+        self._raw[k] = bytes(data)
         self.counters.frames_received += 1
-        fb = self.feedback[motor_id]
-        fb.position, fb.velocity, fb.torque = reply.position, reply.velocity, reply.torque
-        fb.temperature, fb.error_code, fb.error, fb.faulted = reply.temperature, reply.error_code, reply.error, reply.faulted
-        fb.stamp, fb.missed = self._now(), 0
-        self._awaiting.discard(motor_id)
+        answered = bool(self._awaiting[k])
+        self._awaiting[k] = False
+        return int(answered)
+
+    def _decode(self) -> None:
+        if not self._raw:
+            return
+        ks = np.fromiter(self._raw.keys(), dtype=np.int64, count=len(self._raw))
+        frames = np.frombuffer(b"".join(d[:6] for d in self._raw.values()), dtype=np.uint8).reshape(-1, 6)
+        pm, vm, tm = (r[ks] for r in self._ranges[:3])
+        self.position[ks], self.velocity[ks], self.torque[ks] = mit.decode_reply_values((pm, vm, tm), frames)
+        self.stamp[ks] = self.stamp_clock()
+        self.missed[ks] = 0
+        for k, data in self._raw.items():
+            variant = self._variants[k]
+            if variant == "cubemars":
+                temp = data[6] - 256 if data[6] > 127 else data[6]
+                code = data[7]
+                self.temperature[k], self.error_code[k], self.faulted[k] = temp, code, code != 0
+                if code or self.error[k] != "ok":
+                    self.error[k] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}")
+            elif variant == "damiao":
+                code = data[0] >> 4
+                self.temperature[k], self.error_code[k] = data[7], code
+                self.faulted[k] = code not in mit.DAMIAO_HEALTHY
+                self.error[k] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}")
+        self._raw.clear()
 
     def close(self) -> None:
         self.bus.shutdown()
 
 
-class Rs485BusDriver(_Driver):
+class Rs485BusDriver(BusDriver):
     """GO-M8010-style motors on one half-duplex RS-485 port: one command, one reply, in turn."""
 
-    def __init__(self, name: str, port: serial.SerialBase, motor_ids: list[int], stamp_clock: object = time.monotonic) -> None:
-        super().__init__(name, tuple(motor_ids), stamp_clock)
+    def __init__(self, name: str, port: serial.SerialBase, motor_ids: list[int], stamp_clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(name, motor_ids, stamp_clock)
         self.port = port
         self._splitter = rs485.FrameSplitter(rs485.REPLY_HEADER, rs485.REPLY_SIZE)
         self._queue: list[tuple[int, bytes]] = []
-
-    def send_commands(self, commands: dict[int, MotorCommand], mode: int = rs485.MODE_FOC) -> None:
-        """Queue the frames; the bus is half-duplex, so each goes out when the previous reply is in."""
-        self._queue = [(i, rs485.encode_command(i, mode, c.tau, c.dq, c.q, c.kp, c.kd)) for i, c in commands.items()]
         self._pending: tuple[int, float] | None = None
+
+    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool = True) -> None:
+        """Queue the frames; the bus is half-duplex, so each goes out when the previous reply is in."""
+        mode = rs485.MODE_FOC if enabled else rs485.MODE_BRAKE
+        rows = zip(self.motor_ids, q.tolist(), dq.tolist(), kp.tolist(), kd.tolist(), tau.tolist(), strict=True)
+        self._queue = [(i, rs485.encode_command(i, mode, t, v, p, a, b)) for i, p, v, a, b, t in rows]
+        self._pending = None
 
     def write_next(self, deadline: float) -> bool:
         """Send the next queued frame; False when nothing is left."""
@@ -197,7 +265,7 @@ class Rs485BusDriver(_Driver):
         self._pending = None
         if not self._await_reply(motor_id, deadline):
             self.counters.dropped += 1
-            self.feedback[motor_id].missed += 1
+            self.missed[self.index[motor_id]] += 1
 
     def collect(self, deadline: float) -> None:
         while self.write_next(deadline):
@@ -239,15 +307,15 @@ class Rs485BusDriver(_Driver):
             else:
                 self.counters.bad_frames += 1
             return None
-        fb = self.feedback.get(reply.motor_id)
-        if fb is None:
+        k = self.index.get(reply.motor_id)
+        if k is None:
             self.counters.unknown_ids += 1
             return None
         self.counters.frames_received += 1
-        fb.position, fb.velocity, fb.torque = reply.position, reply.speed, reply.torque
-        fb.temperature, fb.error_code, fb.error = float(reply.temperature), reply.error_code, reply.error
-        fb.faulted = reply.error_code != 0
-        fb.stamp, fb.missed = self._now(), 0
+        self.position[k], self.velocity[k], self.torque[k] = reply.position, reply.speed, reply.torque
+        self.temperature[k], self.error_code[k], self.error[k] = reply.temperature, reply.error_code, reply.error
+        self.faulted[k] = reply.error_code != 0
+        self.stamp[k], self.missed[k] = self.stamp_clock(), 0
         return reply.motor_id
 
     def close(self) -> None:

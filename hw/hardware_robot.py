@@ -17,17 +17,15 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from hw import g1
-from hw.drivers import BusCounters, MitBusDriver, MitMotor, MotorCommand, MotorFeedback, Rs485BusDriver
+from hw.drivers import BusCounters, MitBusDriver, MitMotor, MotorFeedback, Rs485BusDriver
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
 from hw.protocols import mit
-from hw.protocols import unitree_rs485 as rs485
 from hw.robot import RobotInterface
 from hw.safety import JointLimits, command_is_finite, feedback_faults, limit_command
 from hw.transport import open_can, open_serial
@@ -45,25 +43,11 @@ class Lifecycle(enum.Enum):
     CLOSED = "closed"
 
 
-def joint_to_motor(j: JointConfig, q: float, dq: float, kp: float, kd: float, tau: float) -> MotorCommand:
-    """Joint-side PD command -> motor-side (direction, zero offset, gear ratio)."""
-    g, s = j.gear_ratio, j.direction
-    return MotorCommand(q=s * (q - j.zero_offset) * g, dq=s * dq * g, kp=kp / (g * g), kd=kd / (g * g), tau=s * tau / g)
-
-
 def motor_to_joint(j: JointConfig, position: float, velocity: float, torque: float) -> tuple[float, float, float]:
+    """Motor-side reading -> joint side. The inverse, used for commands: q_m = s (q - offset) g,
+    dq_m = s dq g, tau_m = s tau / g, kp_m = kp / g^2, kd_m = kd / g^2 (s: direction, g: gear ratio)."""
     g, s = j.gear_ratio, j.direction
     return s * position / g + j.zero_offset, s * velocity / g, s * torque * g
-
-
-@dataclass(frozen=True)
-class _Slot:
-    """Where one joint lives: its config, its driver and its motor id there."""
-
-    name: str
-    joint: JointConfig
-    driver: MitBusDriver | Rs485BusDriver
-    motor_id: int
 
 
 class HardwareRobot(RobotInterface):
@@ -87,7 +71,8 @@ class HardwareRobot(RobotInterface):
         self.cycles = 0
         self._drivers: dict[str, MitBusDriver | Rs485BusDriver] = {}
         self._closed_counters = BusCounters()  # of buses already closed
-        self._slots: list[_Slot] = []
+        self._joint_index: dict[str, np.ndarray] = {}  # bus -> robot joint index of each of its motors
+        self._slot_of: dict[str, tuple[MitBusDriver | Rs485BusDriver, int]] = {}  # joint -> (driver, motor id)
         self.imu: SerialImu | None = None
         self._command: JointCommand | None = None
         self._sent_q: np.ndarray | None = None
@@ -127,6 +112,7 @@ class HardwareRobot(RobotInterface):
         for name in self._names:
             joint = self.cfg.joints[name]
             by_bus.setdefault(joint.bus, []).append((name, joint))
+        index_of = {name: i for i, name in enumerate(self._names)}
         for bus_name, joints in by_bus.items():
             bus_cfg = self.cfg.buses[bus_name]
             if bus_cfg.kind == "can":
@@ -135,12 +121,12 @@ class HardwareRobot(RobotInterface):
             else:
                 driver = Rs485BusDriver(bus_name, open_serial(bus_name, bus_cfg), [j.id for _, j in joints], self.stamp_clock)
             self._drivers[bus_name] = driver
-            self._slots.extend(_Slot(name, j, driver, j.id) for name, j in joints)
-        order = {name: i for i, name in enumerate(self._names)}
-        self._slots.sort(key=lambda s: order[s.name])
-        self._sign = np.array([s.joint.direction for s in self._slots], float)
-        self._gear = np.array([s.joint.gear_ratio for s in self._slots])
-        self._offset = np.array([s.joint.zero_offset for s in self._slots])
+            self._joint_index[bus_name] = np.array([index_of[name] for name, _ in joints])
+            for name, j in joints:
+                self._slot_of[name] = (driver, j.id)
+        self._sign = np.array([self.cfg.joints[n].direction for n in self._names], float)
+        self._gear = np.array([self.cfg.joints[n].gear_ratio for n in self._names])
+        self._offset = np.array([self.cfg.joints[n].zero_offset for n in self._names])
         if self.cfg.imu is not None:
             bus_cfg = self.cfg.buses[self.cfg.imu.bus]
             self.imu = SerialImu(self.cfg.imu.bus, open_serial(self.cfg.imu.bus, bus_cfg), self.stamp_clock)
@@ -152,7 +138,7 @@ class HardwareRobot(RobotInterface):
                 driver.send_special(mit.ENTER_MOTOR_MODE)
                 driver.collect(time.monotonic() + 0.05)
         self._exchange(limp=True, timeout=0.05)
-        return [f"{s.name} (bus {s.joint.bus}, id {s.motor_id})" for s in self._slots if s.driver.feedback[s.motor_id].stamp is None]
+        return [f"{n} (bus {self.cfg.joints[n].bus}, id {self.cfg.joints[n].id})" for n in self._names if self.feedback(n).stamp is None]
 
     def activate(self, target_pose: np.ndarray | None = None) -> None:
         """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
@@ -216,7 +202,7 @@ class HardwareRobot(RobotInterface):
         self._exchange(limp=False, damping=True)
 
     def driver_of(self, joint_name: str) -> MitBusDriver | Rs485BusDriver:
-        return self._slots[self._names.index(joint_name)].driver
+        return self._slot_of[joint_name][0]
 
     def read(self) -> RobotState:
         quat, gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
@@ -278,25 +264,20 @@ class HardwareRobot(RobotInterface):
         )
 
     def _exchange(self, limp: bool, damping: bool = False, command: JointCommand | None = None, timeout: float | None = None) -> None:
-        n = len(self._slots)
+        n = len(self._names)
         if command is not None:
             q, dq, kp, kd, tau = command.q, command.dq, command.kp, command.kd, command.tau_ff
         elif damping:
             q, dq, kp, kd, tau = self._q, self._zeros, self._zeros, self._damp_kd, self._zeros
         else:
-            q = dq = kp = kd = tau = np.zeros(n)
-        # Joint side -> motor side for every joint at once (see `joint_to_motor`).
-        s, g, off = self._sign, self._gear, self._offset
-        mq = (s * (q - off) * g).tolist() if command is not None or damping else [0.0] * n
-        mdq, mkp, mkd, mtau = (s * dq * g).tolist(), (kp / (g * g)).tolist(), (kd / (g * g)).tolist(), (s * tau / g).tolist()
-        per_driver: dict[str, dict[int, MotorCommand]] = {name: {} for name in self._drivers}
-        for i, slot in enumerate(self._slots):
-            per_driver[slot.joint.bus][slot.motor_id] = MotorCommand(mq[i], mdq[i], mkp[i], mkd[i], mtau[i])
+            q, dq, kp, kd, tau = self._offset, self._zeros, self._zeros, self._zeros, self._zeros
+        # Joint side -> motor side for every joint at once (the inverse of `motor_to_joint`).
+        s, g = self._sign, self._gear
+        mq, mdq, mkp, mkd, mtau = s * (q - self._offset) * g, s * dq * g, kp / (g * g), kd / (g * g), s * tau / g
+        assert len(mq) == n
         for name, driver in self._drivers.items():
-            if isinstance(driver, Rs485BusDriver):
-                driver.send_commands(per_driver[name], mode=rs485.MODE_BRAKE if limp else rs485.MODE_FOC)
-            else:
-                driver.send_commands(per_driver[name])
+            idx = self._joint_index[name]
+            driver.send_arrays(mq[idx], mdq[idx], mkp[idx], mkd[idx], mtau[idx], enabled=not limp)
         deadline = time.monotonic() + (timeout if timeout is not None else self.cfg.safety.cycle_timeout)
         serial_drivers = [d for d in self._drivers.values() if isinstance(d, Rs485BusDriver)]
         while serial_drivers:  # RS-485 ports in parallel: one frame out on each, then each reply
@@ -309,24 +290,43 @@ class HardwareRobot(RobotInterface):
         if self.imu is not None:
             self.imu.poll()
 
+    def _gather(self, field: str) -> np.ndarray:
+        """One feedback array of every driver, in robot joint order."""
+        out = np.empty(len(self._names), dtype=getattr(next(iter(self._drivers.values())), field).dtype)
+        for name, driver in self._drivers.items():
+            out[self._joint_index[name]] = getattr(driver, field)
+        return out
+
     def _update_state(self) -> None:
-        for i, slot in enumerate(self._slots):
-            fb = slot.driver.feedback[slot.motor_id]
-            if fb.stamp is not None:
-                self._q[i], self._dq[i], self._tau[i] = motor_to_joint(slot.joint, fb.position, fb.velocity, fb.torque)
+        for name, driver in self._drivers.items():
+            idx = self._joint_index[name]
+            valid = ~np.isnan(driver.stamp)
+            j = idx[valid]
+            s, g = self._sign[j], self._gear[j]
+            self._q[j] = s * driver.position[valid] / g + self._offset[j]
+            self._dq[j] = s * driver.velocity[valid] / g
+            self._tau[j] = s * driver.torque[valid] * g
 
     def _check_feedback(self) -> list[str]:
         now = self.stamp_clock()
-        fbs: list[MotorFeedback] = [s.driver.feedback[s.motor_id] for s in self._slots]
-        faults = feedback_faults(
-            self._names,
-            [f.stamp for f in fbs],
-            [f.missed for f in fbs],
-            [(f.faulted, f.error) for f in fbs],
-            [f.temperature for f in fbs],
-            now,
-            self.cfg.safety,
-        )
+        safety = self.cfg.safety
+        stamp, missed = self._gather("stamp"), self._gather("missed")
+        faulted, temperature = self._gather("faulted"), self._gather("temperature")
+        stale = np.isnan(stamp) | (now - np.nan_to_num(stamp, nan=-np.inf) > safety.reply_timeout)
+        suspect = stale | (missed >= safety.max_missed_replies) | faulted | (np.nan_to_num(temperature) > safety.max_temperature)
+        faults: list[str] = []
+        if suspect.any():  # spell out only what is wrong: the common case costs one vector test
+            bad = [int(i) for i in np.flatnonzero(suspect)]
+            fbs = [self.feedback(self._names[i]) for i in bad]
+            faults = feedback_faults(
+                tuple(self._names[i] for i in bad),
+                [f.stamp for f in fbs],
+                [f.missed for f in fbs],
+                [(f.faulted, f.error) for f in fbs],
+                [f.temperature for f in fbs],
+                now,
+                safety,
+            )
         faults += [d.bus_fault for d in self._drivers.values() if d.bus_fault]
         if self.imu is not None and self.cfg.imu is not None:
             if self.imu.port_fault:
@@ -358,8 +358,8 @@ class HardwareRobot(RobotInterface):
         return total
 
     def feedback(self, name: str) -> MotorFeedback:
-        slot = self._slots[self._names.index(name)]
-        return slot.driver.feedback[slot.motor_id]
+        driver, motor_id = self._slot_of[name]
+        return driver.feedback(motor_id)
 
     # -- shutdown --------------------------------------------------------------------
     def _shutdown(self) -> None:
@@ -377,4 +377,4 @@ class HardwareRobot(RobotInterface):
             driver.close()
         if self.imu is not None:
             self.imu.close()
-        self._drivers, self._slots, self.imu = {}, [], None
+        self._drivers, self._joint_index, self._slot_of, self.imu = {}, {}, {}, None

@@ -18,6 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
+
 ENTER_MOTOR_MODE = bytes.fromhex("fffffffffffffffc")
 EXIT_MOTOR_MODE = bytes.fromhex("fffffffffffffffd")
 SET_ZERO = bytes.fromhex("fffffffffffffffe")
@@ -172,3 +174,43 @@ def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:
     code = data[0] >> 4
     state = DAMIAO_STATES.get(code, f"unknown state {code:#x}")
     return MitReply(data[0] & 0x0F, position, velocity, torque, float(data[7]), float(data[6]), code, state)
+
+
+def encode_commands(
+    r: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    position: np.ndarray,
+    velocity: np.ndarray,
+    kp: np.ndarray,
+    kd: np.ndarray,
+    torque: np.ndarray,
+) -> np.ndarray:
+    """`encode_command` for many motors at once: ranges and values are arrays, one entry per
+    motor (`r` = p_max, v_max, t_max, kp_max, kd_max). Returns an [n, 8] uint8 array whose
+    rows are byte-identical to `encode_command` (same operations in the same order)."""
+    pm, vm, tm, kpm, kdm = r
+    p = ((np.minimum(np.maximum(position, -pm), pm) + pm) * 65535 / (2 * pm)).astype(np.int64)
+    v = ((np.minimum(np.maximum(velocity, -vm), vm) + vm) * 4095 / (2 * vm)).astype(np.int64)
+    kp_u = (np.minimum(np.maximum(kp, 0.0), kpm) * 4095 / kpm).astype(np.int64)
+    kd_u = (np.minimum(np.maximum(kd, 0.0), kdm) * 4095 / kdm).astype(np.int64)
+    t = ((np.minimum(np.maximum(torque, -tm), tm) + tm) * 4095 / (2 * tm)).astype(np.int64)
+    out = np.empty((len(p), 8), dtype=np.uint8)
+    out[:, 0] = p >> 8
+    out[:, 1] = p & 0xFF
+    out[:, 2] = v >> 4
+    out[:, 3] = ((v & 0xF) << 4) | (kp_u >> 8)
+    out[:, 4] = kp_u & 0xFF
+    out[:, 5] = kd_u >> 4
+    out[:, 6] = ((kd_u & 0xF) << 4) | (t >> 8)
+    out[:, 7] = t & 0xFF
+    return out
+
+
+def decode_reply_values(r: tuple[np.ndarray, np.ndarray, np.ndarray], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity and torque of many replies at once (bytes 1-5 have the same layout
+    in every variant); `frames` is [n, >=6] uint8, `r` = p_max, v_max, t_max per row."""
+    pm, vm, tm = r
+    f = frames.astype(np.int64)
+    position = ((f[:, 1] << 8) | f[:, 2]) * (2 * pm) / 65535 - pm
+    velocity = ((f[:, 3] << 4) | (f[:, 4] >> 4)) * (2 * vm) / 4095 - vm
+    torque = (((f[:, 4] & 0xF) << 8) | f[:, 5]) * (2 * tm) / 4095 - tm
+    return position, velocity, torque

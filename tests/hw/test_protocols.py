@@ -158,3 +158,23 @@ def test_imu_frame_round_trip_and_crc() -> None:
     broken[30] ^= 0xFF
     with pytest.raises(rs485.FrameError, match="CRC"):
         imu.decode_imu(bytes(broken))
+
+
+def test_batch_mit_encode_and_decode_match_the_scalar_functions() -> None:
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    n = 2000
+    models = [AK80_9, DM4310]
+    which = rng.integers(0, 2, n)
+    ranges = tuple(np.array([getattr(models[w], f) for w in which]) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max"))
+    values = [rng.uniform(-60, 600, n) for _ in range(5)]
+    batch = mit.encode_commands(ranges, *values)  # type: ignore[arg-type]
+    for i in range(n):
+        scalar = mit.encode_command(models[which[i]], *(float(v[i]) for v in values))
+        assert batch[i].tobytes() == scalar
+    pos, vel, tau = mit.decode_reply_values(ranges[:3], np.concatenate([np.zeros((n, 1), np.uint8), batch[:, :5]], axis=1))
+    for i in range(0, n, 97):
+        frame = bytes([7]) + batch[i, :5].tobytes()
+        reply = mit.decode_reply(models[which[i]], "basic", frame)
+        assert (reply.position, reply.velocity, reply.torque) == (pos[i], vel[i], tau[i])
