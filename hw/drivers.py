@@ -71,17 +71,13 @@ class MitMotor:
     reply: mit.ReplyVariant
 
 
-class BusDriver:
-    """Feedback arrays and counters shared by both protocols."""
+class FeedbackStore:
+    """Newest motor-side feedback of every motor of a robot, in robot joint order.
 
-    def __init__(self, name: str, motor_ids: list[int], stamp_clock: Callable[[], float]) -> None:
-        self.name = name
-        self.motor_ids = tuple(motor_ids)
-        self.index = {motor_id: k for k, motor_id in enumerate(motor_ids)}
-        self.stamp_clock = stamp_clock
-        self.counters = BusCounters()
-        self.bus_fault: str | None = None
-        n = len(motor_ids)
+    Drivers write into it; CAN replies are filed raw (`raw_mit`) and decoded for all buses
+    in one batch by the robot, which keeps a 500 Hz cycle to a few vector operations."""
+
+    def __init__(self, n: int) -> None:
         self.position = np.zeros(n)
         self.velocity = np.zeros(n)
         self.torque = np.zeros(n)
@@ -91,27 +87,37 @@ class BusDriver:
         self.stamp = np.full(n, np.nan)
         self.missed = np.zeros(n, dtype=np.int64)
         self.error = ["ok"] * n
+        self.raw_mit: dict[int, bytes] = {}  # joint index -> newest undecoded MIT reply
 
-    def feedback(self, motor_id: int) -> MotorFeedback:
-        k = self.index[motor_id]
-        temp, stamp = float(self.temperature[k]), float(self.stamp[k])
+    def feedback(self, j: int) -> MotorFeedback:
+        temp, stamp = float(self.temperature[j]), float(self.stamp[j])
         return MotorFeedback(
-            float(self.position[k]),
-            float(self.velocity[k]),
-            float(self.torque[k]),
+            float(self.position[j]),
+            float(self.velocity[j]),
+            float(self.torque[j]),
             None if math.isnan(temp) else temp,
-            int(self.error_code[k]),
-            self.error[k],
-            bool(self.faulted[k]),
+            int(self.error_code[j]),
+            self.error[j],
+            bool(self.faulted[j]),
             None if math.isnan(stamp) else stamp,
-            int(self.missed[k]),
+            int(self.missed[j]),
         )
 
-    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool) -> None:
-        raise NotImplementedError
 
-    def collect(self, deadline: float) -> None:
-        raise NotImplementedError
+class BusDriver:
+    """What both protocols share: the motors of one bus, where their feedback goes, counters."""
+
+    def __init__(
+        self, name: str, motor_ids: list[int], joint_index: list[int], store: FeedbackStore, stamp_clock: Callable[[], float]
+    ) -> None:
+        self.name = name
+        self.motor_ids = tuple(motor_ids)
+        self.joint_index = np.array(joint_index, dtype=np.int64)
+        self.slot = dict(zip(motor_ids, joint_index, strict=True))  # motor id -> robot joint index
+        self.store = store
+        self.stamp_clock = stamp_clock
+        self.counters = BusCounters()
+        self.bus_fault: str | None = None
 
     def close(self) -> None:
         raise NotImplementedError
@@ -120,125 +126,139 @@ class BusDriver:
 class MitBusDriver(BusDriver):
     """MIT-mode motors on one CAN bus. Commands go to arbitration id = motor id."""
 
-    def __init__(self, name: str, bus: can.BusABC, motors: list[MitMotor], stamp_clock: Callable[[], float] = time.monotonic) -> None:
-        super().__init__(name, [m.motor_id for m in motors], stamp_clock)
+    def __init__(
+        self,
+        name: str,
+        bus: can.BusABC,
+        motors: list[MitMotor],
+        joint_index: list[int],
+        store: FeedbackStore,
+        stamp_clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        super().__init__(name, [m.motor_id for m in motors], joint_index, store, stamp_clock)
         self.bus = bus
         self.motors = motors
-        self._ranges = tuple(np.array([getattr(m.ranges, f) for m in motors]) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max"))
-        self._variants = [m.reply for m in motors]
+        self._expected_len = {j: 6 if m.reply == "basic" else 8 for j, m in zip(joint_index, motors, strict=True)}
         # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
-        self._id_mask = 0x0F if set(self._variants) == {"damiao"} else 0xFF
-        self._messages = [can.Message(arbitration_id=i, data=bytes(8), is_extended_id=False) for i in self.motor_ids]
-        self._awaiting = np.zeros(len(motors), dtype=bool)
-        self._raw: dict[int, bytes] = {}
+        self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
+        self._messages = [can.Message(arbitration_id=i, data=bytearray(8), is_extended_id=False) for i in self.motor_ids]
+        self._awaiting: set[int] = set()
 
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
         for motor_id in motor_ids or self.motor_ids:
-            msg = self._messages[self.index[motor_id]]
-            msg.data = bytearray(frame)
-            self._send(self.index[motor_id], msg)
+            k = self.motor_ids.index(motor_id)
+            self._messages[k].data = bytearray(frame)
+            self._send(k)
 
-    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool = True) -> None:
-        frames = mit.encode_commands(self._ranges, q, dq, kp, kd, tau).tobytes()  # type: ignore[arg-type]
+    def send_frames(self, frames: bytes) -> None:
+        """Send one encoded 8-byte command per motor, `frames` concatenated in this driver's motor order."""
         for k, msg in enumerate(self._messages):
             msg.data = bytearray(frames[8 * k : 8 * k + 8])
-            self._send(k, msg)
+            self._send(k)
 
-    def _send(self, k: int, msg: can.Message) -> None:
+    def _send(self, k: int) -> None:
         try:
-            self.bus.send(msg, timeout=0.001)
+            self.bus.send(self._messages[k], timeout=0.001)
         except can.CanError as exc:
             self.counters.send_errors += 1
             self.bus_fault = f"CAN bus '{self.name}' send failed: {exc}"
             return
         self.counters.frames_sent += 1
-        self._awaiting[k] = True
+        self._awaiting.add(int(self.joint_index[k]))
 
     def collect(self, deadline: float) -> None:
-        """Read replies until every awaited motor answered or the wall-clock `deadline` passes."""
-        pending = int(self._awaiting.sum())
-        while pending:
+        """File replies until every awaited motor answered or the wall-clock `deadline` passes."""
+        awaiting = self._awaiting
+        while awaiting:
             msg = self.bus.recv(timeout=max(deadline - time.monotonic(), 0.0))
             if msg is None:
                 break
-            pending -= self._take(msg)
+            self._take(msg)
         while (msg := self.bus.recv(timeout=0.0)) is not None:  # late frames already queued
             self._take(msg)
-        self._decode()
-        lost = self._awaiting
-        self.counters.dropped += int(lost.sum())
-        self.missed[lost] += 1
-        lost[:] = False
+        if awaiting:
+            self.counters.dropped += len(awaiting)
+            for j in awaiting:
+                self.store.missed[j] += 1
+            awaiting.clear()
 
     def collect_now(self, timeout: float) -> None:
         self.collect(time.monotonic() + timeout)
 
-    def _take(self, msg: can.Message) -> int:
-        """File one frame away; returns 1 when it answered an awaited motor."""
+    def _take(self, msg: can.Message) -> None:
         if msg.is_error_frame:
             self.counters.error_frames += 1
             self.bus_fault = f"CAN bus '{self.name}' reported an error frame (bus-off or wiring fault)"
-            return 0
-        data = msg.data
-        if len(data) not in (6, 8):
-            self.counters.bad_frames += 1
-            return 0
-        if len(data) == 8 and data[0] == 0xFF and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
-            return 0  # another host's special frame on the bus
-        k = self.index.get(data[0] & self._id_mask)
-        if k is None:
-            self.counters.unknown_ids += 1
-            return 0
-        expected = 6 if self._variants[k] == "basic" else 8
-        if len(data) != expected:
-            self.counters.bad_frames += 1
-            return 0
-        self._raw[k] = bytes(data)
-        self.counters.frames_received += 1
-        answered = bool(self._awaiting[k])
-        self._awaiting[k] = False
-        return int(answered)
-
-    def _decode(self) -> None:
-        if not self._raw:
             return
-        ks = np.fromiter(self._raw.keys(), dtype=np.int64, count=len(self._raw))
-        frames = np.frombuffer(b"".join(d[:6] for d in self._raw.values()), dtype=np.uint8).reshape(-1, 6)
-        pm, vm, tm = (r[ks] for r in self._ranges[:3])
-        self.position[ks], self.velocity[ks], self.torque[ks] = mit.decode_reply_values((pm, vm, tm), frames)
-        self.stamp[ks] = self.stamp_clock()
-        self.missed[ks] = 0
-        for k, data in self._raw.items():
-            variant = self._variants[k]
-            if variant == "cubemars":
-                temp = data[6] - 256 if data[6] > 127 else data[6]
-                code = data[7]
-                self.temperature[k], self.error_code[k], self.faulted[k] = temp, code, code != 0
-                if code or self.error[k] != "ok":
-                    self.error[k] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}")
-            elif variant == "damiao":
-                code = data[0] >> 4
-                self.temperature[k], self.error_code[k] = data[7], code
-                self.faulted[k] = code not in mit.DAMIAO_HEALTHY
-                self.error[k] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}")
-        self._raw.clear()
+        data = msg.data
+        size = len(data)
+        if size != 8 and size != 6:
+            self.counters.bad_frames += 1
+            return
+        if size == 8 and data[0] == 0xFF and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
+            return  # another host's special frame on the bus
+        j = self.slot.get(data[0] & self._id_mask)
+        if j is None:
+            self.counters.unknown_ids += 1
+            return
+        if size != self._expected_len[j]:
+            self.counters.bad_frames += 1
+            return
+        self.store.raw_mit[j] = bytes(data)
+        self.counters.frames_received += 1
+        self._awaiting.discard(j)
 
     def close(self) -> None:
         self.bus.shutdown()
 
 
+def decode_mit_replies(store: FeedbackStore, ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: list[str], now: float) -> None:
+    """Decode every filed MIT reply at once into the store (`ranges`, `variants` per joint)."""
+    raw = store.raw_mit
+    if not raw:
+        return
+    js = np.fromiter(raw.keys(), dtype=np.int64, count=len(raw))
+    frames = np.frombuffer(b"".join(d[:6] for d in raw.values()), dtype=np.uint8).reshape(-1, 6)
+    pm, vm, tm = (r[js] for r in ranges)
+    store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values((pm, vm, tm), frames)
+    store.stamp[js] = now
+    store.missed[js] = 0
+    for j, data in raw.items():
+        variant = variants[j]
+        if variant == "cubemars":
+            code = data[7]
+            store.temperature[j] = data[6] - 256 if data[6] > 127 else data[6]
+            if code or store.error_code[j]:
+                store.error_code[j], store.faulted[j] = code, code != 0
+                store.error[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}")
+        elif variant == "damiao":
+            code = data[0] >> 4
+            store.temperature[j], store.error_code[j] = data[7], code
+            store.faulted[j] = code not in mit.DAMIAO_HEALTHY
+            store.error[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}")
+    raw.clear()
+
+
 class Rs485BusDriver(BusDriver):
     """GO-M8010-style motors on one half-duplex RS-485 port: one command, one reply, in turn."""
 
-    def __init__(self, name: str, port: serial.SerialBase, motor_ids: list[int], stamp_clock: Callable[[], float] = time.monotonic) -> None:
-        super().__init__(name, motor_ids, stamp_clock)
+    def __init__(
+        self,
+        name: str,
+        port: serial.SerialBase,
+        motor_ids: list[int],
+        joint_index: list[int],
+        store: FeedbackStore,
+        stamp_clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        super().__init__(name, motor_ids, joint_index, store, stamp_clock)
         self.port = port
         self._splitter = rs485.FrameSplitter(rs485.REPLY_HEADER, rs485.REPLY_SIZE)
         self._queue: list[tuple[int, bytes]] = []
         self._pending: tuple[int, float] | None = None
 
-    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool = True) -> None:
+    def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool) -> None:
         """Queue the frames; the bus is half-duplex, so each goes out when the previous reply is in."""
         mode = rs485.MODE_FOC if enabled else rs485.MODE_BRAKE
         rows = zip(self.motor_ids, q.tolist(), dq.tolist(), kp.tolist(), kd.tolist(), tau.tolist(), strict=True)
@@ -265,7 +285,7 @@ class Rs485BusDriver(BusDriver):
         self._pending = None
         if not self._await_reply(motor_id, deadline):
             self.counters.dropped += 1
-            self.missed[self.index[motor_id]] += 1
+            self.store.missed[self.slot[motor_id]] += 1
 
     def collect(self, deadline: float) -> None:
         while self.write_next(deadline):
@@ -307,15 +327,16 @@ class Rs485BusDriver(BusDriver):
             else:
                 self.counters.bad_frames += 1
             return None
-        k = self.index.get(reply.motor_id)
-        if k is None:
+        j = self.slot.get(reply.motor_id)
+        if j is None:
             self.counters.unknown_ids += 1
             return None
         self.counters.frames_received += 1
-        self.position[k], self.velocity[k], self.torque[k] = reply.position, reply.speed, reply.torque
-        self.temperature[k], self.error_code[k], self.error[k] = reply.temperature, reply.error_code, reply.error
-        self.faulted[k] = reply.error_code != 0
-        self.stamp[k], self.missed[k] = self.stamp_clock(), 0
+        st = self.store
+        st.position[j], st.velocity[j], st.torque[j] = reply.position, reply.speed, reply.torque
+        st.temperature[j], st.error_code[j], st.error[j] = reply.temperature, reply.error_code, reply.error
+        st.faulted[j] = reply.error_code != 0
+        st.stamp[j], st.missed[j] = self.stamp_clock(), 0
         return reply.motor_id
 
     def close(self) -> None:

@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hw import g1
-from hw.drivers import BusCounters, MitBusDriver, MitMotor, MotorFeedback, Rs485BusDriver
+from hw.drivers import BusCounters, FeedbackStore, MitBusDriver, MitMotor, MotorFeedback, Rs485BusDriver, decode_mit_replies
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
@@ -71,7 +71,8 @@ class HardwareRobot(RobotInterface):
         self.cycles = 0
         self._drivers: dict[str, MitBusDriver | Rs485BusDriver] = {}
         self._closed_counters = BusCounters()  # of buses already closed
-        self._joint_index: dict[str, np.ndarray] = {}  # bus -> robot joint index of each of its motors
+        self._mit_slices: dict[str, tuple[int, int]] = {}  # CAN bus -> its byte range in the batch of MIT frames
+        self.store = FeedbackStore(len(joint_names))
         self._slot_of: dict[str, tuple[MitBusDriver | Rs485BusDriver, int]] = {}  # joint -> (driver, motor id)
         self.imu: SerialImu | None = None
         self._command: JointCommand | None = None
@@ -113,17 +114,36 @@ class HardwareRobot(RobotInterface):
             joint = self.cfg.joints[name]
             by_bus.setdefault(joint.bus, []).append((name, joint))
         index_of = {name: i for i, name in enumerate(self._names)}
+        n = len(self._names)
+        self.store = FeedbackStore(n)
+        mit_order: list[int] = []
         for bus_name, joints in by_bus.items():
             bus_cfg = self.cfg.buses[bus_name]
+            index = [index_of[name] for name, _ in joints]
             if bus_cfg.kind == "can":
                 motors = [MitMotor(j.id, models[j.model], j.reply) for _, j in joints]
-                driver: MitBusDriver | Rs485BusDriver = MitBusDriver(bus_name, open_can(bus_name, bus_cfg), motors, self.stamp_clock)
+                bus = open_can(bus_name, bus_cfg)
+                driver: MitBusDriver | Rs485BusDriver = MitBusDriver(bus_name, bus, motors, index, self.store, self.stamp_clock)
+                self._mit_slices[bus_name] = (8 * len(mit_order), 8 * (len(mit_order) + len(index)))
+                mit_order += index
             else:
-                driver = Rs485BusDriver(bus_name, open_serial(bus_name, bus_cfg), [j.id for _, j in joints], self.stamp_clock)
+                port = open_serial(bus_name, bus_cfg)
+                driver = Rs485BusDriver(bus_name, port, [j.id for _, j in joints], index, self.store, self.stamp_clock)
             self._drivers[bus_name] = driver
-            self._joint_index[bus_name] = np.array([index_of[name] for name, _ in joints])
             for name, j in joints:
                 self._slot_of[name] = (driver, j.id)
+        self._mit_index = np.array(mit_order, dtype=np.int64)
+        ranges = {f: np.ones(n) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")}
+        self._variants = ["basic"] * n
+        for name in self._names:
+            joint = self.cfg.joints[name]
+            if joint.protocol == "mit":
+                i = index_of[name]
+                for f in ranges:
+                    ranges[f][i] = getattr(models[joint.model], f)
+                self._variants[i] = joint.reply
+        self._mit_ranges = tuple(ranges[f][self._mit_index] for f in ranges)
+        self._reply_ranges = (ranges["p_max"], ranges["v_max"], ranges["t_max"])
         self._sign = np.array([self.cfg.joints[n].direction for n in self._names], float)
         self._gear = np.array([self.cfg.joints[n].gear_ratio for n in self._names])
         self._offset = np.array([self.cfg.joints[n].zero_offset for n in self._names])
@@ -275,9 +295,17 @@ class HardwareRobot(RobotInterface):
         s, g = self._sign, self._gear
         mq, mdq, mkp, mkd, mtau = s * (q - self._offset) * g, s * dq * g, kp / (g * g), kd / (g * g), s * tau / g
         assert len(mq) == n
+        frames = b""
+        if len(self._mit_index):
+            mi = self._mit_index
+            frames = mit.encode_commands(self._mit_ranges, mq[mi], mdq[mi], mkp[mi], mkd[mi], mtau[mi]).tobytes()  # type: ignore[arg-type]
         for name, driver in self._drivers.items():
-            idx = self._joint_index[name]
-            driver.send_arrays(mq[idx], mdq[idx], mkp[idx], mkd[idx], mtau[idx], enabled=not limp)
+            if isinstance(driver, MitBusDriver):
+                start, end = self._mit_slices[name]
+                driver.send_frames(frames[start:end])
+            else:
+                idx = driver.joint_index
+                driver.send_arrays(mq[idx], mdq[idx], mkp[idx], mkd[idx], mtau[idx], enabled=not limp)
         deadline = time.monotonic() + (timeout if timeout is not None else self.cfg.safety.cycle_timeout)
         serial_drivers = [d for d in self._drivers.values() if isinstance(d, Rs485BusDriver)]
         while serial_drivers:  # RS-485 ports in parallel: one frame out on each, then each reply
@@ -287,31 +315,23 @@ class HardwareRobot(RobotInterface):
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.collect(deadline)
+        decode_mit_replies(self.store, self._reply_ranges, self._variants, self.stamp_clock())
         if self.imu is not None:
             self.imu.poll()
 
-    def _gather(self, field: str) -> np.ndarray:
-        """One feedback array of every driver, in robot joint order."""
-        out = np.empty(len(self._names), dtype=getattr(next(iter(self._drivers.values())), field).dtype)
-        for name, driver in self._drivers.items():
-            out[self._joint_index[name]] = getattr(driver, field)
-        return out
-
     def _update_state(self) -> None:
-        for name, driver in self._drivers.items():
-            idx = self._joint_index[name]
-            valid = ~np.isnan(driver.stamp)
-            j = idx[valid]
-            s, g = self._sign[j], self._gear[j]
-            self._q[j] = s * driver.position[valid] / g + self._offset[j]
-            self._dq[j] = s * driver.velocity[valid] / g
-            self._tau[j] = s * driver.torque[valid] * g
+        st = self.store
+        valid = ~np.isnan(st.stamp)
+        s, g, off = self._sign[valid], self._gear[valid], self._offset[valid]
+        self._q[valid] = s * st.position[valid] / g + off
+        self._dq[valid] = s * st.velocity[valid] / g
+        self._tau[valid] = s * st.torque[valid] * g
 
     def _check_feedback(self) -> list[str]:
         now = self.stamp_clock()
         safety = self.cfg.safety
-        stamp, missed = self._gather("stamp"), self._gather("missed")
-        faulted, temperature = self._gather("faulted"), self._gather("temperature")
+        st = self.store
+        stamp, missed, faulted, temperature = st.stamp, st.missed, st.faulted, st.temperature
         stale = np.isnan(stamp) | (now - np.nan_to_num(stamp, nan=-np.inf) > safety.reply_timeout)
         suspect = stale | (missed >= safety.max_missed_replies) | faulted | (np.nan_to_num(temperature) > safety.max_temperature)
         faults: list[str] = []
@@ -358,8 +378,7 @@ class HardwareRobot(RobotInterface):
         return total
 
     def feedback(self, name: str) -> MotorFeedback:
-        driver, motor_id = self._slot_of[name]
-        return driver.feedback(motor_id)
+        return self.store.feedback(self._names.index(name))
 
     # -- shutdown --------------------------------------------------------------------
     def _shutdown(self) -> None:
@@ -377,4 +396,4 @@ class HardwareRobot(RobotInterface):
             driver.close()
         if self.imu is not None:
             self.imu.close()
-        self._drivers, self._joint_index, self._slot_of, self.imu = {}, {}, {}, None
+        self._drivers, self._mit_slices, self._slot_of, self.imu = {}, {}, {}, None
