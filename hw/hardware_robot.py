@@ -332,8 +332,9 @@ class HardwareRobot(RobotInterface):
         safety = self.cfg.safety
         st = self.store
         stamp, missed, faulted, temperature = st.stamp, st.missed, st.faulted, st.temperature
-        stale = np.isnan(stamp) | (now - np.nan_to_num(stamp, nan=-np.inf) > safety.reply_timeout)
-        suspect = stale | (missed >= safety.max_missed_replies) | faulted | (np.nan_to_num(temperature) > safety.max_temperature)
+        # NaN (never replied, no temperature) compares False: `~(age <= limit)` counts it as stale.
+        stale = ~(now - stamp <= safety.reply_timeout)
+        suspect = stale | (missed >= safety.max_missed_replies) | faulted | (temperature > safety.max_temperature)
         faults: list[str] = []
         if suspect.any():  # spell out only what is wrong: the common case costs one vector test
             bad = [int(i) for i in np.flatnonzero(suspect)]

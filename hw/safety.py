@@ -37,13 +37,13 @@ class JointLimits:
 
 def limit_command(cmd: JointCommand, limits: JointLimits, previous_q: FloatArray | None, max_step: float) -> tuple[JointCommand, int]:
     """Clamp a finite command to the limits and the per-cycle step; returns it and how many values were changed."""
-    q = np.clip(cmd.q, limits.q_min, limits.q_max)
+    lo, hi = limits.q_min, limits.q_max
     if previous_q is not None:
-        q = np.clip(q, previous_q - max_step, previous_q + max_step)
-    dq = np.clip(cmd.dq, -limits.dq_max, limits.dq_max)
-    tau = np.clip(cmd.tau_ff, -limits.tau_max, limits.tau_max)
-    kp = np.maximum(cmd.kp, 0.0)
-    kd = np.maximum(cmd.kd, 0.0)
+        lo, hi = np.maximum(lo, previous_q - max_step), np.minimum(hi, previous_q + max_step)
+    q = np.minimum(np.maximum(cmd.q, lo), hi)
+    dq = np.minimum(np.maximum(cmd.dq, -limits.dq_max), limits.dq_max)
+    tau = np.minimum(np.maximum(cmd.tau_ff, -limits.tau_max), limits.tau_max)
+    kp, kd = np.maximum(cmd.kp, 0.0), np.maximum(cmd.kd, 0.0)
     changed = int(np.count_nonzero(q != cmd.q) + np.count_nonzero(dq != cmd.dq) + np.count_nonzero(tau != cmd.tau_ff))
     changed += int(np.count_nonzero(kp != cmd.kp) + np.count_nonzero(kd != cmd.kd))
     return JointCommand(q=q, dq=dq, kp=kp, kd=kd, tau_ff=tau), changed
