@@ -106,11 +106,18 @@ class SweepResult:
 
 
 def sweep(
-    host: HardwareRobot, joint_name: str, pump: Pump, fraction: float = 0.3, speed: float = 0.3, torque_fraction: float = 0.5
+    host: HardwareRobot,
+    joint_name: str,
+    pump: Pump,
+    fraction: float = 0.3,
+    speed: float = 0.3,
+    torque_fraction: float = 0.3,
+    max_tracking_error: float = 0.25,
 ) -> SweepResult:
     """Move one joint slowly, with half its bring-up gains, through `fraction` of its range
     around the middle and back to where it started; every other joint holds its position.
-    Aborts on any fault or a torque above `torque_fraction` of the joint's limit."""
+    Aborts on any fault, a torque above `torque_fraction` of the joint's limit, or the joint
+    lagging its target by more than `max_tracking_error` rad (stuck or blocked)."""
     joint = _joint(host, joint_name)
     if not 0.0 < fraction <= 1.0:
         raise ConfigError(f"--fraction must be within (0, 1], got {fraction}")
@@ -149,6 +156,10 @@ def sweep(
                 break
             if tau > limit:
                 reason = f"unexpected torque {tau:.1f} N m (limit for the sweep {limit:.1f} N m)"
+                break
+            lag = abs(host.read().joint_pos[index] - q[index])
+            if lag > max_tracking_error:
+                reason = f"joint not following: {lag:.2f} rad behind its target (stuck or blocked?), torque {tau:.1f} N m"
                 break
         if reason != "completed":
             break

@@ -32,6 +32,8 @@ class EmulatedMotor:
     temperature: float = AMBIENT_C
     error_code: int = 0
     last_command_time: float | None = None
+    stalled_torque: float | None = None  # motor side: what a seized motor's controller pushes
+    _last_command: MotorCommand | None = None
     _thermal_time: float | None = None
 
     def apply(self, plant: Plant, command: MotorCommand | None, over_temperature_code: int, stuck: bool) -> None:
@@ -41,10 +43,18 @@ class EmulatedMotor:
         if self.temperature > OVER_TEMPERATURE_C and self.error_code == 0:
             self.error_code = over_temperature_code
         if command is not None:
-            self.last_command_time = now
+            self.last_command_time, self._last_command = now, command
         expired = self.last_command_time is None or now - self.last_command_time > self.watchdog_s
+        self.stalled_torque = None
         if stuck:
+            # The output is seized: the joint does not move, and the motor's own PD pushes
+            # against the seizure, so its current (the reported torque) grows with the error.
             plant.set_joint_command(self.joint_name, plant.joint_state(self.joint_name)[0], 0.0, 0.0, 500.0, 0.0)
+            c = self._last_command
+            if c is not None and self.enabled:
+                position, velocity, _ = self.reading(plant)
+                pushed = c.kp * (c.q - position) + c.kd * (c.dq - velocity) + c.tau
+                self.stalled_torque = max(-self.torque_max, min(self.torque_max, pushed))
         elif not self.enabled or self.error_code != 0 or (command is None and expired):
             plant.set_joint_command(self.joint_name, 0.0, 0.0, 0.0, 0.0, 0.0)  # limp
         elif command is not None:
@@ -65,7 +75,8 @@ class EmulatedMotor:
         q, dq, tau = plant.joint_state(self.joint_name)
         j = self.joint
         s, g = j.direction, j.gear_ratio
-        return s * (q - j.zero_offset) * g - self.encoder_zero, s * dq * g, s * tau / g
+        torque = self.stalled_torque if self.stalled_torque is not None else s * tau / g
+        return s * (q - j.zero_offset) * g - self.encoder_zero, s * dq * g, torque
 
     def set_zero(self, plant: Plant) -> None:
         position, _, _ = self.reading(plant)

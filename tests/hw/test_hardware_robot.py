@@ -257,3 +257,21 @@ def test_unknown_can_interface_is_named() -> None:
 def test_faults_from_a_fault_plan_are_seeded() -> None:
     a, b = FaultPlan(drop_reply_prob=0.5, seed=3), FaultPlan(drop_reply_prob=0.5, seed=3)
     assert [a.drop() for _ in range(20)] == [b.drop() for _ in range(20)]
+
+
+def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
+    from hw import bringup
+
+    with rig(g1_model) as (host, twin, _plant):
+        host.configure()
+        twin.step()
+        elbow = host.cfg.joints["left_elbow_joint"]
+        twin.faults["can2"].stuck = {elbow.id}
+
+        def pump() -> None:
+            host.cycle()
+            twin.step()
+
+        result = bringup.sweep(host, "left_elbow_joint", pump, fraction=0.3, speed=1.0)
+        assert not result.completed and ("not following" in result.reason or "unexpected torque" in result.reason)
+        assert host.state is Lifecycle.INACTIVE  # the sweep ends deactivated: damped, then disabled
