@@ -6,24 +6,17 @@ from pathlib import Path
 
 from controller.assets import Assets
 from controller.policy import OnnxPolicy, PolicyConfig
-from hw.errors import ConfigError
-from hw.yamlconfig import load_config
+from hw.yamlconfig import load_config, preset_names, resolve_preset
 
 POLICY_DIR = Path(__file__).resolve().parent.parent / "configs" / "policies"
 
 
 def available_policies() -> list[str]:
-    return sorted(p.stem for p in POLICY_DIR.glob("*.yaml"))
+    return preset_names(POLICY_DIR)
 
 
 def policy_config_path(name_or_path: str) -> Path:
-    path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") and path.is_file():
-        return path
-    path = POLICY_DIR / f"{name_or_path}.yaml"
-    if not path.is_file():
-        raise ConfigError(f"unknown policy '{name_or_path}' (available: {', '.join(available_policies())}, or a path to a policy .yaml)")
-    return path
+    return resolve_preset(name_or_path, POLICY_DIR, "policy")
 
 
 def load_policy(name_or_path: str, assets: Assets, robot_joint_names: tuple[str, ...]) -> OnnxPolicy:

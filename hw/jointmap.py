@@ -14,7 +14,7 @@ from typing import Literal
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES
 from hw.protocols.mit import MitRanges
-from hw.yamlconfig import from_dict, load_config, load_yaml
+from hw.yamlconfig import from_dict, load_config, load_yaml, preset_names, resolve_preset
 
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 HARDWARE_DIR = CONFIG_DIR / "hardware"
@@ -107,17 +107,11 @@ def load_motor_models(path: Path = MOTORS_PATH) -> dict[str, MitRanges]:
 
 
 def available_hardware() -> list[str]:
-    return sorted(p.stem for p in HARDWARE_DIR.glob("*.yaml"))
+    return preset_names(HARDWARE_DIR)
 
 
 def hardware_config_path(name_or_path: str) -> Path:
-    path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") and path.is_file():
-        return path
-    path = HARDWARE_DIR / f"{name_or_path}.yaml"
-    if not path.is_file():
-        raise ConfigError(f"unknown hardware config '{name_or_path}' (available: {', '.join(available_hardware())}, or a path to a .yaml)")
-    return path
+    return resolve_preset(name_or_path, HARDWARE_DIR, "hardware config")
 
 
 def load_hardware_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig:

@@ -124,3 +124,19 @@ def _convert_dataclass(cls: type, value: Any, source: str, key: str) -> Any:
         return cls(**kwargs)
     except ValueError as exc:  # __post_init__ validation
         raise ConfigError(f"{_where(source, key)}: {exc}") from exc
+
+
+def preset_names(folder: Path) -> list[str]:
+    """The presets of a config folder: its YAML files by stem."""
+    return sorted(p.stem for p in folder.glob("*.yaml"))
+
+
+def resolve_preset(name_or_path: str, folder: Path, kind: str) -> Path:
+    """A preset of `folder` by name, or a YAML file by path; an unknown name lists the valid ones."""
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") and path.is_file():
+        return path
+    path = folder / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError(f"unknown {kind} '{name_or_path}' (available: {', '.join(preset_names(folder))}, or a path to a .yaml file)")
+    return path

@@ -10,7 +10,7 @@ import numpy as np
 
 from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
 from hw.errors import ConfigError
-from hw.yamlconfig import load_config
+from hw.yamlconfig import load_config, preset_names
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "configs" / "scenarios"
 
@@ -59,7 +59,7 @@ class Scenario:
 
 
 def available_scenarios() -> list[str]:
-    return sorted(p.stem for p in SCENARIO_DIR.glob("*.yaml"))
+    return preset_names(SCENARIO_DIR)
 
 
 def load_scenario(name_or_path: str) -> Scenario:

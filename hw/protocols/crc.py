@@ -1,4 +1,4 @@
-"""CRC-16/KERMIT (CCITT polynomial, reflected 0x8408, initial value 0, no final xor)."""
+"""CRC-16/KERMIT (CCITT polynomial, reflected 0x8408, initial value 0, no final xor) and CRC-framed checks."""
 
 from __future__ import annotations
 
@@ -21,3 +21,19 @@ def crc16_kermit(data: bytes | bytearray | memoryview, crc: int = 0) -> int:
     for byte in data:
         crc = (crc >> 8) ^ _TABLE[(crc ^ byte) & 0xFF]
     return crc
+
+
+class FrameError(ValueError):
+    """A frame with the wrong length, header or CRC."""
+
+
+def check_crc_frame(frame: bytes, size: int, header: bytes, what: str) -> None:
+    """Length, two-byte header and trailing little-endian CRC-16/KERMIT of a fixed-size frame."""
+    if len(frame) != size:
+        raise FrameError(f"{what} must be {size} bytes, got {len(frame)}")
+    if frame[:2] != header:
+        raise FrameError(f"{what} header must be {header.hex()}, got {frame[:2].hex()}")
+    crc = crc16_kermit(frame[:-2])
+    stored = frame[-2] | (frame[-1] << 8)
+    if crc != stored:
+        raise FrameError(f"{what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")

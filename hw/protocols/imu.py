@@ -20,8 +20,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from hw.protocols.crc import crc16_kermit
-from hw.protocols.unitree_rs485 import FrameError
+from hw.protocols.crc import FrameError, check_crc_frame, crc16_kermit
 
 HEADER = b"\xa5\x5a"
 FRAME_TYPE = 0x01
@@ -45,14 +44,7 @@ def encode_imu(sample: ImuSample) -> bytes:
 
 
 def decode_imu(frame: bytes) -> ImuSample:
-    if len(frame) != SIZE:
-        raise FrameError(f"IMU frame must be {SIZE} bytes, got {len(frame)}")
-    if frame[:2] != HEADER:
-        raise FrameError(f"IMU frame header must be {HEADER.hex()}, got {frame[:2].hex()}")
-    crc = crc16_kermit(frame[:-2])
-    stored = frame[-2] | (frame[-1] << 8)
-    if crc != stored:
-        raise FrameError(f"IMU frame CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
+    check_crc_frame(frame, SIZE, HEADER, "IMU frame")
     _, kind, seq, *values = _BODY.unpack_from(frame)
     if kind != FRAME_TYPE:
         raise FrameError(f"IMU frame type {kind:#04x} is not {FRAME_TYPE:#04x}")

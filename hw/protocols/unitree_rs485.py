@@ -15,7 +15,9 @@ import math
 import struct
 from dataclasses import dataclass
 
-from hw.protocols.crc import crc16_kermit
+from hw.protocols.crc import FrameError, check_crc_frame, crc16_kermit
+
+__all__ = ["FrameError"]  # re-exported: callers catch it from here
 
 COMMAND_HEADER = b"\xfe\xee"
 REPLY_HEADER = b"\xfd\xee"
@@ -32,10 +34,6 @@ _POSITION_SCALE = 32768.0 / (2.0 * math.pi)
 _GAIN_SCALE = 1280.0
 _CMD = struct.Struct("<2sBhhiHH")
 _REPLY = struct.Struct("<2sBhhibH")
-
-
-class FrameError(ValueError):
-    """A frame with the wrong length, header or CRC."""
 
 
 @dataclass(frozen=True)
@@ -91,7 +89,7 @@ def encode_command(motor_id: int, mode: int, torque: float, speed: float, positi
 
 
 def decode_command(frame: bytes) -> MotorCommand:
-    _check(frame, COMMAND_SIZE, COMMAND_HEADER, "command")
+    check_crc_frame(frame, COMMAND_SIZE, COMMAND_HEADER, "RS-485 command")
     _, id_mode, tau, dq, q, kp, kd = _CMD.unpack_from(frame)
     return MotorCommand(
         id_mode & 0x0F,
@@ -118,20 +116,9 @@ def encode_reply(motor_id: int, mode: int, torque: float, speed: float, position
 
 
 def decode_reply(frame: bytes) -> MotorReply:
-    _check(frame, REPLY_SIZE, REPLY_HEADER, "reply")
+    check_crc_frame(frame, REPLY_SIZE, REPLY_HEADER, "RS-485 reply")
     _, id_mode, tau, dq, q, temp, err = _REPLY.unpack_from(frame)
     return MotorReply(id_mode & 0x0F, (id_mode >> 4) & 0x07, tau / _TORQUE_SCALE, dq / _SPEED_SCALE, q / _POSITION_SCALE, temp, err & 0x7)
-
-
-def _check(frame: bytes, size: int, header: bytes, what: str) -> None:
-    if len(frame) != size:
-        raise FrameError(f"RS-485 {what} must be {size} bytes, got {len(frame)}")
-    if frame[:2] != header:
-        raise FrameError(f"RS-485 {what} header must be {header.hex()}, got {frame[:2].hex()}")
-    crc = crc16_kermit(frame[:-2])
-    stored = frame[-2] | (frame[-1] << 8)
-    if crc != stored:
-        raise FrameError(f"RS-485 {what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
 
 
 @dataclass(frozen=True)
