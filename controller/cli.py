@@ -24,7 +24,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from hw.errors import G1Error
+from hw.errors import G1Error, HardwareFault
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -44,6 +44,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
     sim.add_argument("--hardware", default=None, help="drive the sim through a hardware config's codecs and buses (sim-can, sim-mixed)")
+    sim.add_argument("--faults", default=None, help="with --hardware: YAML of faults to inject per bus (configs/faults/)")
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
     sim.add_argument("--progress", action="store_true", help="show a progress bar")
@@ -78,6 +79,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _build_parser().parse_args(argv)
     try:
         return _dispatch(args)
+    except HardwareFault as exc:  # the run started and ended in a latched fault: not a usage mistake
+        print(f"g1ctl: fault: {exc}", file=sys.stderr)
+        return 1
     except G1Error as exc:
         print(f"g1ctl: error: {exc}", file=sys.stderr)
         return 2
@@ -126,7 +130,7 @@ def _sim(args: argparse.Namespace) -> int:
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, duration=args.duration, seed=args.seed, input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
-        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware,
+        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
     )  # fmt: skip
     report = run(cfg)
     summary = {

@@ -13,6 +13,7 @@ import time
 from typing import Any
 
 from controller.metrics import percentiles_ms
+from hw.emulation.faults import load_faults
 from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import load_hardware_config
@@ -24,7 +25,7 @@ from sim.robot import SimRobot
 # a long ramp would only let the un-balanced robot sag. Waiting on the emulators costs
 # no simulated time, so replies may take longer in wall time than on real hardware.
 SIM_SOFT_START_S = 0.2
-SIM_CYCLE_TIMEOUT_S = 0.02
+SIM_CYCLE_TIMEOUT_S = 0.006
 
 
 class DirectBackend:
@@ -50,14 +51,15 @@ class DirectBackend:
 
 
 class HardwareBackend:
-    def __init__(self, truth: SimRobot, hardware: str) -> None:
+    def __init__(self, truth: SimRobot, hardware: str, faults: str | None = None) -> None:
         self.truth = truth
         cfg = load_hardware_config(hardware)
+        plans = load_faults(faults, list(cfg.buses)) if faults else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
         cfg = dataclasses.replace(cfg, safety=safety)
         self.name = hardware
         self.plant = MuJoCoPlant(truth)
-        self.twin = SimulatedHardware(cfg, self.plant)
+        self.twin = SimulatedHardware(cfg, self.plant, plans)
         self.host = HardwareRobot(self.twin.host_config, stamp_clock=self.plant.time)
         self.robot: RobotInterface = self.host
         self.cycle_times: list[float] = []

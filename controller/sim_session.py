@@ -48,6 +48,7 @@ class SimRunConfig:
     assets_dir: str | None = None
     video_fps: int = 20
     hardware: str | None = None  # a hardware config: drive the sim through its codecs and buses
+    faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
     picture: Path | None = None  # PNG of the final frame
 
 
@@ -76,12 +77,16 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     policy = load_policy(cfg.policy, assets, robot.joint_names)
     if cfg.hardware is not None:
         load_hardware_config(cfg.hardware)  # a bad config is a user error before anything starts
+    elif cfg.faults is not None:
+        raise ConfigError("--faults needs --hardware: faults are injected into simulated hardware")
     interactive = cfg.input != "scripted"
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
     if duration is not None and duration <= 0:
         raise ConfigError(f"--duration must be positive, got {duration}")
     realtime = cfg.realtime or interactive or cfg.viewer
-    backend: DirectBackend | HardwareBackend = DirectBackend(robot) if cfg.hardware is None else HardwareBackend(robot, cfg.hardware)
+    backend: DirectBackend | HardwareBackend = (
+        DirectBackend(robot) if cfg.hardware is None else HardwareBackend(robot, cfg.hardware, cfg.faults)
+    )
     clock = (RealtimeSimulationClock if realtime else SimulationClock)(lambda: robot.time, backend.advance_to)
     loop = RateLoop(clock, policy.cfg.rate_hz)
     controlled = backend.robot

@@ -21,6 +21,9 @@ import serial
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
 
+CAN_ERR_CRTL = 0x04  # SocketCAN error classes (linux/can/error.h): controller problems
+CAN_ERR_BUSOFF = 0x40
+
 
 @dataclass(frozen=True)
 class MotorCommand:
@@ -189,8 +192,9 @@ class MitBusDriver(BusDriver):
     def _take(self, msg: can.Message) -> None:
         if msg.is_error_frame:
             self.counters.error_frames += 1
-            self.bus_fault = f"CAN bus '{self.name}' reported an error frame (bus-off or wiring fault)"
-            return
+            if msg.arbitration_id & (CAN_ERR_BUSOFF | CAN_ERR_CRTL):
+                self.bus_fault = f"CAN bus '{self.name}' is bus-off or its controller failed (error class {msg.arbitration_id:#x})"
+            return  # other classes (a frame that failed its CRC, ...) are counted, not fatal alone
         data = msg.data
         size = len(data)
         if size != 8 and size != 6:

@@ -132,3 +132,22 @@ def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
     hw = report["hw"]
     assert hw["faults"] == 0 and hw["frames_received"] > 29 * 1400
     assert set(hw["cycle_ms"]) == {"p50", "p99"} and hw["crc_errors"] == 0
+
+
+def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
+    report_path = tmp_path / "lossy.json"
+    result = g1ctl(
+        "sim", "--hardware", "sim-can", "--faults", "configs/faults/lossy-can.yaml", "--duration", "1.5", "--report", str(report_path)
+    )
+    assert result.returncode == 0, result.stderr
+    hw = json.loads(report_path.read_text())["hw"]
+    assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
+
+    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", "configs/faults/overheat-left-knee.yaml", "--duration", "1")
+    assert overheat.returncode == 1
+    assert "left_knee_joint" in overheat.stderr and "over-temperature" in overheat.stderr
+
+    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("buses:\n  can9: {drop_reply_prob: 0.1}\n")
+    assert "buses ['can9'] are not in the hardware config" in one_line_error(g1ctl("sim", "--hardware", "sim-can", "--faults", str(bad)))

@@ -25,6 +25,8 @@ from hw.protocols import imu as imu_frame
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
 
+CAN_ERR_PROT = 0x08  # SocketCAN error classes (linux/can/error.h)
+CAN_ERR_BUSOFF = 0x40
 CUBEMARS_OVER_TEMPERATURE = 1
 DAMIAO_COIL_OVER_TEMPERATURE = 0xC
 RS485_OVERHEAT = 1
@@ -99,7 +101,7 @@ class MitBusEmulator(_Emulator):
             motor_id, data = msg.arbitration_id, bytes(msg.data)
             if faults.bus_off:
                 if not self._bus_off_sent:
-                    bus.send(can.Message(is_error_frame=True, arbitration_id=0x20000004, data=bytes(8), is_extended_id=True))
+                    bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
                     self._bus_off_sent = True
                 continue
             if len(data) != 8:
@@ -112,10 +114,11 @@ class MitBusEmulator(_Emulator):
                 continue
             if faults.delay_reply_s:
                 time.sleep(faults.delay_reply_s)
-            reply = status[motor_id]
-            if faults.corrupt_prob:
-                reply = can.Message(arbitration_id=motor_id, data=faults.corrupt(bytes(reply.data)), is_extended_id=False)
-            bus.send(reply)
+            if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
+                # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
+                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
+                continue
+            bus.send(status[motor_id])
             self.frames_out += 1
 
     def _special(self, motor_id: int, data: bytes) -> None:

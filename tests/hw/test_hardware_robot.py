@@ -124,7 +124,7 @@ def test_bus_off_drill(g1_model) -> None:
         twin.faults["can1"].bus_off = True
         run_cycles(host, twin, 5)
         assert host.state is Lifecycle.ERROR
-        assert any("can1" in f and "error frame" in f for f in host.faults)
+        assert any("can1" in f and "bus-off" in f for f in host.faults)
         assert host.counters().error_frames >= 1
         twin.faults["can1"].bus_off = False
         run_cycles(host, twin, 3)
