@@ -9,7 +9,7 @@ Usage:
     g1ctl bench hw [--report PATH] [--seconds 60]
     g1ctl hw scan|monitor|zero|sweep|damp|imu --hardware NAME   (bench bring-up, see hw_commands)
     g1ctl hw frame encode|decode --protocol mit|unitree-rs485 ...
-    g1ctl scenarios            (list the shipped scenarios and policies)
+    g1ctl scenarios            (list the shipped scenarios, policies and hardware configs)
 
 Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
 A mistake in the input ends with one line on stderr and exit status 2; a fault during
@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -67,7 +69,7 @@ def _build_parser() -> argparse.ArgumentParser:
     hw_bench.add_argument("--seconds", type=float, default=60.0)
     hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
 
-    sub.add_parser("scenarios", help="list shipped scenarios and policy presets")
+    sub.add_parser("scenarios", help="list shipped scenarios, policy presets and hardware configs")
 
     from controller.hw_commands import add_hw_parser  # noqa: PLC0415 - keeps `g1ctl --help` import-light
 
@@ -77,6 +79,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = _build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="g1ctl: %(message)s")
     try:
         return _dispatch(args)
     except HardwareFault as exc:  # the run started and ended in a latched fault: not a usage mistake
@@ -88,6 +91,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("g1ctl: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # output piped into `head` and the like
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 def _dispatch(args: argparse.Namespace) -> int:
@@ -117,9 +123,11 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "scenarios":
         from controller.inputs.scripted import available_scenarios  # noqa: PLC0415
         from controller.policies import available_policies  # noqa: PLC0415
+        from hw.jointmap import available_hardware  # noqa: PLC0415
 
         print("scenarios:", ", ".join(available_scenarios()))
         print("policies: ", ", ".join(available_policies()))
+        print("hardware: ", ", ".join(available_hardware()))
         return 0
     raise AssertionError(args.command)
 

@@ -47,14 +47,14 @@ def probe(host: HardwareRobot) -> list[dict[str, Any]]:
 
 
 def format_table(rows: list[dict[str, Any]], columns: tuple[str, ...]) -> str:
-    def cell(v: Any) -> str:
+    def cell(column: str, v: Any) -> str:
         if v is None:
             return "-"
         if isinstance(v, float):
-            return f"{v:+.3f}"
+            return f"{v:.1f}" if column in ("temperature", "temp", "age_ms") else f"{v:+.3f}"
         return str(v)
 
-    body = [[cell(r.get(c)) for c in columns] for r in rows]
+    body = [[cell(c, r.get(c)) for c in columns] for r in rows]
     widths = [max(len(c), *(len(b[i]) for b in body)) for i, c in enumerate(columns)]
     lines = ["  ".join(c.ljust(w) for c, w in zip(columns, widths, strict=True))]
     lines += ["  ".join(v.ljust(w) for v, w in zip(b, widths, strict=True)) for b in body]
