@@ -79,6 +79,9 @@ class HardwareRobot(RobotInterface):
         self._sent_q: np.ndarray | None = None
         self._ramp: tuple[float, np.ndarray] | None = None
         self._ramp_target = self.default_pose
+        self._settled: tuple[JointCommand | None, JointCommand | None] = (None, None)  # (written, limited) reused while unchanged
+        self._encoded: tuple[JointCommand | None, bytes] = (None, b"")  # (limited command, its CAN frames)
+        self._has_serial = False
         n = len(joint_names)
         self._damp_kd = np.full(n, cfg.safety.damping_kd)
         self._zeros = np.zeros(n)
@@ -133,6 +136,7 @@ class HardwareRobot(RobotInterface):
             for name, j in joints:
                 self._slot_of[name] = (driver, j.id)
         self._mit_index = np.array(mit_order, dtype=np.int64)
+        self._has_serial = any(isinstance(d, Rs485BusDriver) for d in self._drivers.values())
         ranges = {f: np.ones(n) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")}
         self._variants = ["basic"] * n
         for name in self._names:
@@ -170,6 +174,7 @@ class HardwareRobot(RobotInterface):
         if faults:
             self._enter_error(faults)
             raise HardwareFault(f"cannot activate: {faults[0]}")
+        self._forget_settled()
         self._ramp = (self.stamp_clock(), self._q.copy())
         self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
         self._sent_q = self._q.copy()
@@ -189,6 +194,7 @@ class HardwareRobot(RobotInterface):
         if self.state is not Lifecycle.ERROR:
             self.state = Lifecycle.INACTIVE
         self._ramp, self._command = None, None
+        self._forget_settled()
 
     def rearm(self) -> None:
         """Leave ERROR explicitly once the feedback is healthy again; the robot is then INACTIVE."""
@@ -204,6 +210,7 @@ class HardwareRobot(RobotInterface):
 
     # -- control ---------------------------------------------------------------------
     def write(self, command: JointCommand) -> None:
+        """Newest command for the next cycles. The robot keeps it: do not change its arrays afterwards."""
         if not command_is_finite(command):
             self._enter_error(["non-finite joint command from the controller"])
             return
@@ -272,10 +279,20 @@ class HardwareRobot(RobotInterface):
             return self._hold_command()
         else:
             cmd = self._command
+            written, settled = self._settled
+            if cmd is written and settled is not None:
+                # The controller writes at 50 Hz, this runs at 500 Hz: a command that already
+                # passed the limits unchanged passes them again, frames and all.
+                return settled
         limited, changed = limit_command(cmd, self.limits, self._sent_q, safety.max_position_step)
         self.clamped_values += changed
         self._sent_q = limited.q
+        self._settled = (cmd, limited) if changed == 0 and self.state is Lifecycle.ACTIVE else (None, None)
         return limited
+
+    def _forget_settled(self) -> None:
+        """After any state change a command must pass the limits (and the step limit) afresh."""
+        self._settled, self._encoded = (None, None), (None, b"")
 
     def _hold_command(self) -> JointCommand:
         q = self._sent_q if self._sent_q is not None else self._q
@@ -283,29 +300,33 @@ class HardwareRobot(RobotInterface):
             q=q, dq=self._zeros, kp=np.array([self.cfg.joints[n].kp for n in self._names]), kd=self._damp_kd, tau_ff=self._zeros
         )
 
-    def _exchange(self, limp: bool, damping: bool = False, command: JointCommand | None = None, timeout: float | None = None) -> None:
-        n = len(self._names)
+    def _motor_side(self, limp: bool, damping: bool, command: JointCommand | None) -> tuple[np.ndarray, ...]:
+        """Joint side -> motor side for every joint at once (the inverse of `motor_to_joint`)."""
         if command is not None:
             q, dq, kp, kd, tau = command.q, command.dq, command.kp, command.kd, command.tau_ff
         elif damping:
             q, dq, kp, kd, tau = self._q, self._zeros, self._zeros, self._damp_kd, self._zeros
-        else:
+        else:  # limp: zero everything (position 0 at the motor)
             q, dq, kp, kd, tau = self._offset, self._zeros, self._zeros, self._zeros, self._zeros
-        # Joint side -> motor side for every joint at once (the inverse of `motor_to_joint`).
         s, g = self._sign, self._gear
-        mq, mdq, mkp, mkd, mtau = s * (q - self._offset) * g, s * dq * g, kp / (g * g), kd / (g * g), s * tau / g
-        assert len(mq) == n
-        frames = b""
-        if len(self._mit_index):
+        return s * (q - self._offset) * g, s * dq * g, kp / (g * g), kd / (g * g), s * tau / g
+
+    def _exchange(self, limp: bool, damping: bool = False, command: JointCommand | None = None, timeout: float | None = None) -> None:
+        cached = command is not None and command is self._encoded[0]
+        motor = None if cached and not self._has_serial else self._motor_side(limp, damping, command)
+        frames = self._encoded[1] if cached else b""
+        if not cached and len(self._mit_index) and motor is not None:
             mi = self._mit_index
-            frames = mit.encode_commands(self._mit_ranges, mq[mi], mdq[mi], mkp[mi], mkd[mi], mtau[mi]).tobytes()  # type: ignore[arg-type]
+            frames = mit.encode_commands(self._mit_ranges, *(a[mi] for a in motor)).tobytes()  # type: ignore[arg-type]
+            self._encoded = (command, frames)
         for name, driver in self._drivers.items():
             if isinstance(driver, MitBusDriver):
                 start, end = self._mit_slices[name]
                 driver.send_frames(frames[start:end])
-            else:
+            elif motor is not None:
                 idx = driver.joint_index
-                driver.send_arrays(mq[idx], mdq[idx], mkp[idx], mkd[idx], mtau[idx], enabled=not limp)
+                mq, mdq, mkp, mkd, mtau = (a[idx] for a in motor)
+                driver.send_arrays(mq, mdq, mkp, mkd, mtau, enabled=not limp)
         deadline = time.monotonic() + (timeout if timeout is not None else self.cfg.safety.cycle_timeout)
         serial_drivers = [d for d in self._drivers.values() if isinstance(d, Rs485BusDriver)]
         while serial_drivers:  # RS-485 ports in parallel: one frame out on each, then each reply
@@ -364,6 +385,7 @@ class HardwareRobot(RobotInterface):
             self.faults = faults
         self.state = Lifecycle.ERROR
         self._command = None
+        self._forget_settled()
         if self._drivers:
             self._exchange(limp=False, damping=True)
 

@@ -275,3 +275,25 @@ def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
         result = bringup.sweep(host, "left_elbow_joint", pump, fraction=0.3, speed=1.0)
         assert not result.completed and ("not following" in result.reason or "unexpected torque" in result.reason)
         assert host.state is Lifecycle.INACTIVE  # the sweep ends deactivated: damped, then disabled
+
+
+def test_rewritten_command_after_rearm_is_step_limited_again(g1_model) -> None:
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        far = host.default_pose.copy()
+        knee = g1.JOINT_NAMES.index("left_knee_joint")
+        far[knee] += 1.0
+        cmd = JointCommand(q=far, dq=np.zeros(N), kp=np.full(N, 40.0), kd=np.ones(N), tau_ff=np.zeros(N))
+        host.write(cmd)
+        run_cycles(host, twin, 10)  # reaches the target in 0.3 rad steps, then the command is reused as is
+        host.enter_damping("drill")
+        run_cycles(host, twin, 50)
+        host.rearm()
+        host.activate()
+        while host.state is Lifecycle.ACTIVATING:
+            run_cycles(host, twin, 1)
+        start = len(plant.applied)
+        host.write(cmd)  # the very same object as before the fault
+        run_cycles(host, twin, 1)
+        sent = [q for joint, q, kp, _ in plant.applied[start:] if joint == "left_knee_joint" and kp > 0]
+        assert sent and abs(sent[-1] - host.default_pose[knee]) <= host.cfg.safety.max_position_step + 0.02
