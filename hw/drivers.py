@@ -146,6 +146,7 @@ class MitBusDriver(BusDriver):
         self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
         self._messages = [can.Message(arbitration_id=i, data=bytearray(8), is_extended_id=False) for i in self.motor_ids]
         self._awaiting: set[int] = set()
+        self._joints = [int(j) for j in joint_index]
 
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
@@ -156,9 +157,17 @@ class MitBusDriver(BusDriver):
 
     def send_frames(self, frames: bytes) -> None:
         """Send one encoded 8-byte command per motor, `frames` concatenated in this driver's motor order."""
-        for k, msg in enumerate(self._messages):
-            msg.data = bytearray(frames[8 * k : 8 * k + 8])
-            self._send(k)
+        send, sent = self.bus.send, 0
+        try:
+            for k, msg in enumerate(self._messages):
+                msg.data = bytearray(frames[8 * k : 8 * k + 8])
+                send(msg)
+                sent += 1
+        except can.CanError as exc:
+            self.counters.send_errors += 1
+            self.bus_fault = f"CAN bus '{self.name}' send failed: {exc}"
+        self.counters.frames_sent += sent
+        self._awaiting.update(self._joints[:sent])
 
     def _send(self, k: int) -> None:
         try:
@@ -168,7 +177,7 @@ class MitBusDriver(BusDriver):
             self.bus_fault = f"CAN bus '{self.name}' send failed: {exc}"
             return
         self.counters.frames_sent += 1
-        self._awaiting.add(int(self.joint_index[k]))
+        self._awaiting.add(self._joints[k])
 
     def collect(self, deadline: float) -> None:
         """File replies until every awaited motor answered or the wall-clock `deadline` passes."""
@@ -217,31 +226,48 @@ class MitBusDriver(BusDriver):
         self.bus.shutdown()
 
 
-def decode_mit_replies(store: FeedbackStore, ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: list[str], now: float) -> None:
-    """Decode every filed MIT reply at once into the store (`ranges`, `variants` per joint)."""
+def decode_mit_replies(store: FeedbackStore, ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: np.ndarray, now: float) -> None:
+    """Decode every filed MIT reply at once into the store (`ranges` and `variants` per joint;
+    variants coded 0 basic, 1 cubemars, 2 damiao)."""
     raw = store.raw_mit
     if not raw:
         return
     js = np.fromiter(raw.keys(), dtype=np.int64, count=len(raw))
-    frames = np.frombuffer(b"".join(d[:6] for d in raw.values()), dtype=np.uint8).reshape(-1, 6)
+    frames = np.frombuffer(b"".join(d.ljust(8, b"\0") for d in raw.values()), dtype=np.uint8).reshape(-1, 8)
+    raw.clear()
     pm, vm, tm = (r[js] for r in ranges)
     store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values((pm, vm, tm), frames)
     store.stamp[js] = now
     store.missed[js] = 0
-    for j, data in raw.items():
-        variant = variants[j]
-        if variant == "cubemars":
-            code = data[7]
-            store.temperature[j] = data[6] - 256 if data[6] > 127 else data[6]
-            if code or store.error_code[j]:
-                store.error_code[j], store.faulted[j] = code, code != 0
-                store.error[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}")
-        elif variant == "damiao":
-            code = data[0] >> 4
-            store.temperature[j], store.error_code[j] = data[7], code
-            store.faulted[j] = code not in mit.DAMIAO_HEALTHY
-            store.error[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}")
-    raw.clear()
+    kind = variants[js]
+    cube, dm = kind == 1, kind == 2
+    if cube.any():
+        jc = js[cube]
+        store.temperature[jc] = frames[cube, 6].view(np.int8)
+        _set_codes(store, jc, frames[cube, 7].astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
+    if dm.any():
+        jd = js[dm]
+        store.temperature[jd] = frames[dm, 7]
+        _set_codes(
+            store,
+            jd,
+            (frames[dm, 0] >> 4).astype(np.int64),
+            mit.DAMIAO_STATES,
+            "unknown state {:#x}",
+            lambda c: c not in mit.DAMIAO_HEALTHY,
+        )
+
+
+def _set_codes(
+    store: FeedbackStore, js: np.ndarray, codes: np.ndarray, names: dict[int, str], unknown: str, bad: Callable[[int], bool]
+) -> None:
+    """Error codes into the store; names are looked up only where a code changed (rarely)."""
+    changed = codes != store.error_code[js]
+    if changed.any():
+        for j, code in zip(js[changed].tolist(), codes[changed].tolist(), strict=True):
+            store.error_code[j] = code
+            store.error[j] = names.get(code, unknown.format(code))
+            store.faulted[j] = bad(code)
 
 
 class Rs485BusDriver(BusDriver):

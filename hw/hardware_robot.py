@@ -138,14 +138,14 @@ class HardwareRobot(RobotInterface):
         self._mit_index = np.array(mit_order, dtype=np.int64)
         self._has_serial = any(isinstance(d, Rs485BusDriver) for d in self._drivers.values())
         ranges = {f: np.ones(n) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")}
-        self._variants = ["basic"] * n
+        self._variants = np.zeros(n, dtype=np.int64)  # MIT reply variant per joint: 0 basic, 1 cubemars, 2 damiao
         for name in self._names:
             joint = self.cfg.joints[name]
             if joint.protocol == "mit":
                 i = index_of[name]
                 for f in ranges:
                     ranges[f][i] = getattr(models[joint.model], f)
-                self._variants[i] = joint.reply
+                self._variants[i] = mit.REPLY_VARIANTS.index(joint.reply)
         self._mit_ranges = tuple(ranges[f][self._mit_index] for f in ranges)
         self._reply_ranges = (ranges["p_max"], ranges["v_max"], ranges["t_max"])
         self._sign = np.array([self.cfg.joints[n].direction for n in self._names], float)
