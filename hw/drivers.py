@@ -232,30 +232,28 @@ def decode_mit_replies(store: FeedbackStore, ranges: tuple[np.ndarray, np.ndarra
     raw = store.raw_mit
     if not raw:
         return
-    js = np.fromiter(raw.keys(), dtype=np.int64, count=len(raw))
-    frames = np.frombuffer(b"".join(d.ljust(8, b"\0") for d in raw.values()), dtype=np.uint8).reshape(-1, 8)
+    n = len(raw)
+    js = np.fromiter(raw.keys(), dtype=np.int64, count=n)
+    data = b"".join(raw.values())
+    if len(data) != 8 * n:  # 6-byte basic replies among them
+        data = b"".join(d.ljust(8, b"\0") for d in raw.values())
     raw.clear()
+    words = mit.reply_words(data, n)
     pm, vm, tm = (r[js] for r in ranges)
-    store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values((pm, vm, tm), frames)
+    store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values((pm, vm, tm), words)
     store.stamp[js] = now
     store.missed[js] = 0
     kind = variants[js]
     cube, dm = kind == 1, kind == 2
     if cube.any():
-        jc = js[cube]
-        store.temperature[jc] = frames[cube, 6].view(np.int8)
-        _set_codes(store, jc, frames[cube, 7].astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
+        jc, wc = js[cube], words[cube]
+        store.temperature[jc] = ((wc >> 8) & 0xFF).astype(np.uint8).view(np.int8)
+        _set_codes(store, jc, (wc & 0xFF).astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
     if dm.any():
-        jd = js[dm]
-        store.temperature[jd] = frames[dm, 7]
-        _set_codes(
-            store,
-            jd,
-            (frames[dm, 0] >> 4).astype(np.int64),
-            mit.DAMIAO_STATES,
-            "unknown state {:#x}",
-            lambda c: c not in mit.DAMIAO_HEALTHY,
-        )
+        jd, wd = js[dm], words[dm]
+        store.temperature[jd] = wd & 0xFF
+        states = (wd >> 60).astype(np.int64)
+        _set_codes(store, jd, states, mit.DAMIAO_STATES, "unknown state {:#x}", lambda c: c not in mit.DAMIAO_HEALTHY)
 
 
 def _set_codes(
