@@ -52,20 +52,19 @@ class SimRunConfig:
     picture: Path | None = None  # PNG of the final frame
 
 
-def make_source(cfg: SimRunConfig, limits: CommandLimits, duration: float) -> tuple[CommandSource, Any]:
-    """The command source and, for scripted runs, its timeline."""
+def make_source(cfg: SimRunConfig, limits: CommandLimits, duration: float) -> CommandSource:
+    """The command source of the run: a scenario's timeline, the keyboard or a gamepad."""
     if cfg.input == "scripted":
-        steps = timeline(load_scenario(cfg.scenario), duration, limits, cfg.seed)
-        return ScriptedSource(steps, limits), steps
+        return ScriptedSource(timeline(load_scenario(cfg.scenario), duration, limits, cfg.seed), limits)
     if cfg.input == "keyboard":
         from controller.inputs.keyboard import HELP, KeyboardSource  # noqa: PLC0415
 
         print(HELP, file=sys.stderr)
-        return KeyboardSource(limits), None
+        return KeyboardSource(limits)
     if cfg.input == "gamepad":
         from controller.inputs.gamepad import GamepadConfig, GamepadSource  # noqa: PLC0415
 
-        return GamepadSource(GamepadConfig(), limits), None
+        return GamepadSource(GamepadConfig(), limits)
     raise ConfigError(f"unknown input '{cfg.input}' (valid: {', '.join(INPUTS)})")
 
 
@@ -99,7 +98,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
 
     with ExitStack() as stack:
         stack.callback(backend.close)
-        source, _steps = make_source(cfg, policy.command_limits, duration or 0.0)
+        source = make_source(cfg, policy.command_limits, duration or 0.0)
         stack.enter_context(source)
         if cfg.video is not None:
             from sim.render import VideoRecorder  # noqa: PLC0415 - rendering is optional

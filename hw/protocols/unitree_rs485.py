@@ -6,7 +6,8 @@ int32 position = q * 32768 / (2 pi); uint16 kp = kp * 1280; uint16 kd = kd * 128
 truncated toward zero after clamping to its field's range; CRC-16/KERMIT over bytes 0-14
 in bytes 15-16. Reply, 16 bytes: header FD EE, id/mode byte, torque, speed, position with
 the same scales, int8 temperature, uint16 whose bits 0-2 are the error code, CRC over
-bytes 0-13 in bytes 14-15. All quantities are on the rotor side; `GearRatio` converts.
+bytes 0-13 in bytes 14-15. All quantities are on the rotor side; the joint map's gear ratio
+converts (`hw.hardware_robot.motor_to_joint` and its inverse).
 """
 
 from __future__ import annotations
@@ -119,21 +120,6 @@ def decode_reply(frame: bytes) -> MotorReply:
     check_crc_frame(frame, REPLY_SIZE, REPLY_HEADER, "RS-485 reply")
     _, id_mode, tau, dq, q, temp, err = _REPLY.unpack_from(frame)
     return MotorReply(id_mode & 0x0F, (id_mode >> 4) & 0x07, tau / _TORQUE_SCALE, dq / _SPEED_SCALE, q / _POSITION_SCALE, temp, err & 0x7)
-
-
-@dataclass(frozen=True)
-class GearRatio:
-    """Joint side <-> rotor side: q, dq scale by the ratio; torque by its inverse; gains by its inverse square."""
-
-    ratio: float = GO_M8010_GEAR_RATIO
-
-    def to_rotor(self, q: float, dq: float, tau: float, kp: float, kd: float) -> tuple[float, float, float, float, float]:
-        g = self.ratio
-        return q * g, dq * g, tau / g, kp / (g * g), kd / (g * g)
-
-    def to_joint(self, q: float, dq: float, tau: float) -> tuple[float, float, float]:
-        g = self.ratio
-        return q / g, dq / g, tau * g
 
 
 class FrameSplitter:

@@ -129,12 +129,23 @@ def test_rs485_bad_crc_length_and_header() -> None:
         rs485.decode_reply(b"\xfe\xee" + bytes(frame[2:]))
 
 
-def test_gear_ratio_conversions() -> None:
-    g = rs485.GearRatio(6.33)
-    q, dq, tau, kp, kd = g.to_rotor(1.0, 2.0, 6.33, 40.0, 2.0)
-    assert (q, dq, tau) == pytest.approx((6.33, 12.66, 1.0))
-    assert kp == pytest.approx(40.0 / 6.33**2) and kd == pytest.approx(2.0 / 6.33**2)
-    assert g.to_joint(6.33, 12.66, 1.0) == pytest.approx((1.0, 2.0, 6.33))
+def test_gear_ratio_and_direction_conversions() -> None:
+    from hw.hardware_robot import motor_to_joint
+    from hw.jointmap import JointConfig
+
+    joint = JointConfig(
+        bus="b",
+        protocol="unitree-rs485",
+        id=1,
+        position_limits=(-1.0, 1.0),
+        velocity_limit=10.0,
+        torque_limit=50.0,
+        direction=-1,
+        zero_offset=0.2,
+        gear_ratio=6.33,
+    )
+    q, dq, tau = motor_to_joint(joint, -6.33, 12.66, 1.0)
+    assert (q, dq, tau) == pytest.approx((1.2, -2.0, -6.33))
 
 
 def test_frame_splitter_resyncs_after_garbage() -> None:
