@@ -5,7 +5,8 @@ trivial echo responder on each bus. The stack side is the full `HardwareRobot.cy
 (safety layer, encode, send, collect, decode, feedback checks) against the MIT firmware
 emulators of `sim-can`, whose plant holds the joints still (no physics on these cores);
 the emulators' control step runs between cycles, outside the timed part, as a motor's
-own controller does.
+own controller does. Both loops run under the same scheduling, SCHED_FIFO by default
+(`--rt-priority`), as a deployed control process would; the report says which was granted.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import HardwareConfig, load_hardware_config
 from hw.protocols import mit
+from hw.realtime import request_realtime
 from hw.types import JointCommand
 
 RATE_HZ = 500.0
@@ -119,8 +121,9 @@ class _StackRig:
             raise RuntimeError(f"the stack faulted during the benchmark: {host.faults}")
 
 
-def run_hw_bench(seconds: float, raw_seconds: float) -> dict[str, Any]:
-    """Alternate slices of raw round trips and stack cycles, so both see the same machine load."""
+def run_hw_bench(seconds: float, raw_seconds: float, rt_priority: int = 0) -> dict[str, Any]:
+    """Alternate slices of raw round trips and stack cycles, so both see the same machine load and scheduling."""
+    scheduling = request_realtime(rt_priority)
     cfg = _can_only(load_hardware_config("sim-can"))
     slices = max(int(seconds // 6), 1)
     raw: list[float] = []
@@ -145,6 +148,7 @@ def run_hw_bench(seconds: float, raw_seconds: float) -> dict[str, Any]:
         "seconds": seconds,
         "cycles": len(stack_times),
         "slices": slices,
+        "scheduling": scheduling.describe(),
         "cycle_ms": cycle_ms,
         "raw_round_trip_ms": raw_ms,
         "ratio": round(cycle_ms["p50"] / raw_ms["p50"], 3),

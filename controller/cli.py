@@ -68,6 +68,7 @@ def _build_parser() -> argparse.ArgumentParser:
     hw_bench.add_argument("--report", type=Path, default=None)
     hw_bench.add_argument("--seconds", type=float, default=60.0)
     hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
+    hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
 
     sub.add_parser("scenarios", help="list shipped scenarios, policy presets and hardware configs")
 
@@ -112,7 +113,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "bench" and args.bench_command == "hw":
         from controller.bench_hw import run_hw_bench  # noqa: PLC0415
 
-        _emit(run_hw_bench(args.seconds, args.raw_seconds), args.report)
+        _emit(run_hw_bench(args.seconds, args.raw_seconds, args.rt_priority), args.report)
         return 0
     if args.command == "bench":
         from controller.bench import run_loop_bench  # noqa: PLC0415

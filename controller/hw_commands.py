@@ -32,6 +32,7 @@ def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     def with_hardware(name: str, help_text: str) -> argparse.ArgumentParser:
         p = hw_sub.add_parser(name, help=help_text)
         p.add_argument("--hardware", required=True, help="hardware config name (configs/hardware) or path")
+        p.add_argument("--rt-priority", type=int, default=0, help="run the bus cycle under SCHED_FIFO at this priority (1-99)")
         return p
 
     with_hardware("scan", help_text="list the motors answering on each bus")
@@ -71,8 +72,10 @@ def run_hw(args: argparse.Namespace) -> int:
         return _frame(args)
     from controller.hw_session import open_hardware  # noqa: PLC0415
     from hw import bringup  # noqa: PLC0415
+    from hw.realtime import request_realtime  # noqa: PLC0415
 
     command = args.hw_command
+    request_realtime(args.rt_priority)
     if command in ("zero", "sweep") and not args.yes and not _confirm(f"{command} {args.joint} on '{args.hardware}'?"):
         print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
         return 1

@@ -105,6 +105,8 @@ def test_bringup_bad_input_is_one_line() -> None:
     assert "unknown joint 'left_knee'" in line
     line = one_line_error(g1ctl("hw", "zero", "--hardware", "sim-can", "--joint", "left_knee_joint"))
     assert "pass --yes" in line
+    line = one_line_error(g1ctl("hw", "damp", "--hardware", "sim-can", "--rt-priority", "120"))
+    assert "real-time priority 120 is out of range" in line
 
 
 def test_joint_map_with_duplicate_id_is_named(tmp_path: Path) -> None:

@@ -1,0 +1,54 @@
+"""Real-time scheduling for the process that runs the 500 Hz bus cycle.
+
+Under the default time-sharing scheduler a 2 ms cycle is late whenever another task
+holds the core; SCHED_FIFO lets the control threads preempt ordinary work, the way
+ros2_control's `thread_priority` and Unitree's deploy scripts run. Call it before any
+bus thread starts: threads inherit the policy. It needs CAP_SYS_NICE (root, or an
+`rtprio` line in /etc/security/limits.conf); without it the run goes on at normal
+priority and the returned report says why.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass
+
+from hw.errors import ConfigError
+
+log = logging.getLogger(__name__)
+
+MAX_PRIORITY = 99
+
+
+@dataclass(frozen=True)
+class Scheduling:
+    """What the process runs under after `request_realtime`."""
+
+    policy: str
+    priority: int
+    note: str = ""
+
+    def describe(self) -> str:
+        text = f"{self.policy} {self.priority}" if self.policy == "SCHED_FIFO" else self.policy
+        return f"{text} ({self.note})" if self.note else text
+
+
+def request_realtime(priority: int) -> Scheduling:
+    """Switch this process to SCHED_FIFO at `priority` (1-99); 0 keeps normal scheduling."""
+    if not 0 <= priority <= MAX_PRIORITY:
+        raise ConfigError(f"real-time priority {priority} is out of range: use 1-{MAX_PRIORITY}, or 0 for normal scheduling")
+    if priority == 0:
+        return Scheduling("SCHED_OTHER", 0)
+    if not hasattr(os, "sched_setscheduler"):
+        return _normal(f"SCHED_FIFO is not available on {os.name}")
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except PermissionError:
+        return _normal("SCHED_FIFO not permitted: run as root or grant rtprio in /etc/security/limits.conf")
+    return Scheduling("SCHED_FIFO", priority)
+
+
+def _normal(why: str) -> Scheduling:
+    log.warning("%s; running at normal priority, expect late cycles under load", why)
+    return Scheduling("SCHED_OTHER", 0, why)
