@@ -1,0 +1,1 @@
+"""The generative kinematic planner: motion data, in-betweening model, runtime and benchmark."""

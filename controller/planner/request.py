@@ -1,0 +1,126 @@
+"""Plan requests and plans: the planner contract of DESIGN.md as typed values.
+
+A request is checked once, here, so every planner (the learned one, the baselines, a
+planner exported elsewhere) sees the same valid input. Frames are G1 `qpos` at 30 fps:
+root position xyz, root quaternion w,x,y,z, 29 joint angles in the standard order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hw import g1
+from hw.errors import G1Error
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+FPS = 30.0
+QPOS_DIM = g1.QPOS_SIZE
+CONTEXT_FRAMES = 4
+MIN_LENGTH, MAX_LENGTH, LENGTH_STEP = 24, 64, 4
+ALLOWED_LENGTHS = tuple(range(MIN_LENGTH, MAX_LENGTH + 1, LENGTH_STEP))
+MODES = ("inbetween",)  # command-driven modes (idle, walk, ...) arrive with the replanning loop
+TEXT_EMBEDDING_DIM = 64
+
+
+class PlanRequestError(G1Error, ValueError):
+    """A plan request that no planner can serve: wrong shapes, NaN, unknown mode, impossible length."""
+
+
+@dataclass(frozen=True)
+class Keyframe:
+    """A pose constraint at plan frame `frame` (0 is the first frame after the context).
+
+    `joints` marks which of the 29 joint angles of `qpos` are constrained; `root` constrains
+    the root's horizontal position and heading (and height when `root_height` is set).
+    """
+
+    frame: int
+    qpos: FloatArray
+    joints: BoolArray = field(default_factory=lambda: np.ones(g1.NUM_JOINTS, dtype=bool))
+    root: bool = True
+    root_height: bool = False
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """What the planner is asked: continue `context` for one of `lengths` frames, meeting the keyframes.
+
+    A target root position and heading at the last frame is a keyframe with `root=True` and
+    no joints; `target_root` builds one.
+    """
+
+    context: FloatArray  # [4, 36], oldest first
+    keyframes: tuple[Keyframe, ...] = ()
+    lengths: tuple[int, ...] = (44,)
+    mode: str = "inbetween"
+    text_embedding: FloatArray | None = None  # [64], filled by the text planner later
+    seed: int = 0
+
+    def validated(self) -> PlanRequest:
+        """The same request with arrays as float64, or PlanRequestError naming what is wrong."""
+        context = _finite_array(self.context, (CONTEXT_FRAMES, QPOS_DIM), "context")
+        if self.mode not in MODES:
+            raise PlanRequestError(f"unknown plan mode '{self.mode}'; valid modes: {', '.join(MODES)}")
+        bad = [n for n in self.lengths if n not in ALLOWED_LENGTHS]
+        if not self.lengths or bad:
+            raise PlanRequestError(
+                f"plan lengths {list(self.lengths)} are not allowed: use multiples of {LENGTH_STEP} from {MIN_LENGTH} to {MAX_LENGTH}"
+            )
+        longest = max(self.lengths)
+        keyframes = []
+        for k in self.keyframes:
+            if not 0 <= k.frame < longest:
+                raise PlanRequestError(f"keyframe at frame {k.frame} is outside a plan of at most {longest} frames")
+            joints = np.asarray(k.joints, dtype=bool)
+            if joints.shape != (g1.NUM_JOINTS,):
+                raise PlanRequestError(f"keyframe joint mask must have {g1.NUM_JOINTS} entries, got shape {joints.shape}")
+            qpos = _finite_array(k.qpos, (QPOS_DIM,), f"keyframe {k.frame} qpos")
+            keyframes.append(Keyframe(k.frame, qpos, joints, k.root, k.root_height))
+        frames = [k.frame for k in keyframes]
+        if len(set(frames)) != len(frames):
+            raise PlanRequestError(f"two keyframes at the same frame: {sorted(frames)}; merge them into one")
+        text = None if self.text_embedding is None else _finite_array(self.text_embedding, (TEXT_EMBEDDING_DIM,), "text embedding")
+        return PlanRequest(context, tuple(sorted(keyframes, key=lambda k: k.frame)), tuple(self.lengths), self.mode, text, int(self.seed))
+
+    def plan_length(self) -> int:
+        """The shortest allowed length that reaches past the last keyframe."""
+        last = max((k.frame for k in self.keyframes), default=-1)
+        return min((n for n in self.lengths if n > last), default=max(self.lengths))
+
+
+def target_root(frame: int, x: float, y: float, heading: float) -> Keyframe:
+    """A keyframe that constrains only the root's horizontal position and heading (rad, about z)."""
+    qpos = np.zeros(QPOS_DIM)
+    qpos[:3] = (x, y, g1.STANDING_PELVIS_HEIGHT)
+    qpos[3:7] = (np.cos(heading / 2), 0.0, 0.0, np.sin(heading / 2))
+    return Keyframe(frame, qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=True)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The planner's answer: `qpos` [N, 36] at 30 fps, foot contacts [N, 2] (left, right), and its latency."""
+
+    qpos: FloatArray
+    contacts: BoolArray
+    latency_ms: float
+
+    @property
+    def length(self) -> int:
+        return len(self.qpos)
+
+
+def _finite_array(value: object, shape: tuple[int, ...], what: str) -> FloatArray:
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise PlanRequestError(f"{what} is not numeric: {exc}") from exc
+    if array.shape != shape:
+        raise PlanRequestError(f"{what} must have shape {list(shape)}, got {list(array.shape)}")
+    if not np.isfinite(array).all():
+        raise PlanRequestError(f"{what} holds NaN or infinite values; send finite frames")
+    return array
