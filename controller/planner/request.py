@@ -36,14 +36,15 @@ class Keyframe:
     """A pose constraint at plan frame `frame` (0 is the first frame after the context).
 
     `joints` marks which of the 29 joint angles of `qpos` are constrained; `root` constrains
-    the root's horizontal position and heading (and height when `root_height` is set).
+    the root's horizontal position and heading, `root_height` its height and tilt. The
+    defaults constrain the whole pose.
     """
 
     frame: int
     qpos: FloatArray
     joints: BoolArray = field(default_factory=lambda: np.ones(g1.NUM_JOINTS, dtype=bool))
     root: bool = True
-    root_height: bool = False
+    root_height: bool = True
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,7 @@ def target_root(frame: int, x: float, y: float, heading: float) -> Keyframe:
     qpos = np.zeros(QPOS_DIM)
     qpos[:3] = (x, y, g1.STANDING_PELVIS_HEIGHT)
     qpos[3:7] = (np.cos(heading / 2), 0.0, 0.0, np.sin(heading / 2))
-    return Keyframe(frame, qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=True)
+    return Keyframe(frame, qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=True, root_height=False)
 
 
 @dataclass(frozen=True)
