@@ -88,3 +88,23 @@ class VideoRecorder:
 def save_png(frame: np.ndarray, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     imageio.imwrite(str(path), frame)
+
+
+def render_poses(model: mujoco.MjModel, poses: np.ndarray, lookat: np.ndarray, width: int = 320, height: int = 240) -> list[np.ndarray]:
+    """Images of each `qpos` in `poses` [T, nq] seen from a fixed side camera aimed at `lookat` (kinematics only)."""
+    renderer = _make_renderer(model, width, height)
+    data = mujoco.MjData(model)
+    camera = mujoco.MjvCamera()
+    camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+    camera.lookat[:] = lookat
+    camera.distance, camera.azimuth, camera.elevation = 3.2, 120.0, -15.0
+    images = []
+    try:
+        for qpos in poses:
+            data.qpos[:] = qpos
+            mujoco.mj_kinematics(model, data)
+            renderer.update_scene(data, camera=camera)
+            images.append(renderer.render().copy())
+    finally:
+        renderer.close()
+    return images

@@ -1,0 +1,104 @@
+"""What the network sees and what it predicts, shared by training and the runtime.
+
+Conditioning (one flat vector): the 4 context frames as channels, the anchor curve every
+4th frame (it carries the keyframes and the target root), which frames and body groups
+are constrained, the plan length (one-hot) and the optional text-embedding slot with its
+presence flag. Missing constraints are zeros whose mask entries are zero: the first
+layer's weights on the mask entries act as the learned "missing" embeddings.
+
+Prediction: a residual [64, 38] over the anchor curve (36 channels) plus foot contacts
+(2, centred on 0.5), zero beyond the plan length.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from controller.planner import features as ft
+from controller.planner.request import ALLOWED_LENGTHS, CONTEXT_FRAMES, MAX_LENGTH, TEXT_EMBEDDING_DIM, PlanRequest
+from hw import g1
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+FRAMES = MAX_LENGTH
+CURVE_STRIDE = 4
+CONTACTS = 2
+OUT_CHANNELS = ft.NUM_CHANNELS + CONTACTS
+_LEGS, _WAIST, _ARMS = slice(7, 19), slice(19, 22), slice(22, 36)
+GROUPS: tuple[tuple[str, list[int]], ...] = (
+    ("root_plan", [0, 1, ft.HEADING]),
+    ("root_pose", [ft.ROOT_Z, 4, 5, 6]),
+    ("legs", list(range(_LEGS.start, _LEGS.stop))),
+    ("waist", list(range(_WAIST.start, _WAIST.stop))),
+    ("arms", list(range(_ARMS.start, _ARMS.stop))),
+)
+COND_DIM = (  # context, curve samples, group masks, length one-hot, text slot and flag
+    CONTEXT_FRAMES * ft.NUM_CHANNELS
+    + (FRAMES // CURVE_STRIDE) * ft.NUM_CHANNELS
+    + FRAMES * len(GROUPS)
+    + len(ALLOWED_LENGTHS)
+    + TEXT_EMBEDDING_DIM
+    + 1
+)
+
+
+def conditioning(
+    context: FloatArray, curve: FloatArray, mask: BoolArray, length: NDArray[np.int64], text: FloatArray | None = None
+) -> FloatArray:
+    """[..., COND_DIM] from context channels [..., 4, C], anchor curve and mask [..., F, C], plan length [...]."""
+    batch = context.shape[:-2]
+    groups = np.stack([mask[..., idx].mean(axis=-1) for _, idx in GROUPS], axis=-1)  # [..., F, G]
+    one_hot = (np.asarray(length)[..., None] == np.array(ALLOWED_LENGTHS)).astype(np.float64)
+    if text is None:
+        text_part = np.zeros((*batch, TEXT_EMBEDDING_DIM + 1))
+    else:
+        text_part = np.concatenate((np.broadcast_to(text, (*batch, TEXT_EMBEDDING_DIM)), np.ones((*batch, 1))), axis=-1)
+    parts = (
+        context.reshape(*batch, -1),
+        curve[..., ::CURVE_STRIDE, :].reshape(*batch, -1),
+        groups.reshape(*batch, -1),
+        one_hot,
+        text_part,
+    )
+    return np.concatenate(parts, axis=-1)
+
+
+def residual_target(truth: FloatArray, contacts: FloatArray, curve: FloatArray, length: NDArray[np.int64]) -> FloatArray:
+    """[..., F, 38] training target from true channels and contacts [..., F, 2] over plan frames."""
+    valid = np.arange(FRAMES) < np.asarray(length)[..., None]  # [..., F]
+    residual = np.concatenate((truth - curve, contacts - 0.5), axis=-1)
+    return np.where(valid[..., None], residual, 0.0)
+
+
+def request_constraints(request: PlanRequest, origin_xy: FloatArray, origin_yaw: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Keyframes of a validated request as channel values and mask [F, C] in the canonical frame."""
+    values = np.zeros((FRAMES, ft.NUM_CHANNELS))
+    mask = np.zeros((FRAMES, ft.NUM_CHANNELS), dtype=bool)
+    for key in request.keyframes:
+        values[key.frame] = ft.to_channels(key.qpos[None], origin_xy, origin_yaw)[0]
+        mask[key.frame, ft.JOINTS] = key.joints
+        if key.root:
+            mask[key.frame, [0, 1, ft.HEADING]] = True
+        if key.root_height:
+            mask[key.frame, ft.ROOT_Z] = True
+            mask[key.frame, ft.TILT] = True
+    return values, mask
+
+
+def joint_group_mask(rng: np.random.Generator) -> NDArray[np.bool_]:
+    """A random subset of joint groups for a partial keyframe in training: legs, waist, arms, one arm."""
+    mask = np.zeros(g1.NUM_JOINTS, dtype=bool)
+    choice = rng.integers(5)
+    if choice == 0:
+        mask[:] = True
+    elif choice == 1:
+        mask[15:] = True  # both arms
+    elif choice == 2:
+        mask[15 + 7 * rng.integers(2) :][:7] = True  # one arm
+    elif choice == 3:
+        mask[:12] = True  # legs
+    else:
+        mask[12:] = True  # waist and arms
+    return mask

@@ -1,0 +1,156 @@
+"""The planner's motion representation: G1 `qpos` <-> canonical channels, and the anchor curve.
+
+Channels, per frame (36): root x, y, z; heading (unwrapped yaw, rad); tilt (the rotation
+vector of the root orientation with its heading removed, 3); 29 joint angles. They are
+expressed in the frame of the last context frame: its root at the origin, facing +x. The
+model is thus invariant to where and which way the robot stands, and every channel can be
+interpolated linearly (unlike quaternions).
+
+The anchor curve passes exactly through every constraint (the context's last frame and
+each keyframe channel) and starts with the context's velocity; the network adds a residual
+that a window forces to zero at the constraints. Constraints are met by construction,
+whatever the sample. All functions are vectorized over leading batch dimensions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hw import g1
+
+FloatArray = NDArray[np.float64]
+
+ROOT_XY = slice(0, 2)
+ROOT_Z = 2
+HEADING = 3
+TILT = slice(4, 7)
+JOINTS = slice(7, 7 + g1.NUM_JOINTS)
+NUM_CHANNELS = 7 + g1.NUM_JOINTS
+RAMP_FRAMES = 6  # the residual window rises from 0 to 1 over this many frames away from a constraint
+
+
+# ---- rotations (quaternions w, x, y, z) ----------------------------------------------------
+
+
+def quat_multiply(a: FloatArray, b: FloatArray) -> FloatArray:
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack(
+        (
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ),
+        axis=-1,
+    )
+
+
+def quat_from_yaw(yaw: FloatArray) -> FloatArray:
+    half = np.asarray(yaw) / 2
+    zero = np.zeros_like(half)
+    return np.stack((np.cos(half), zero, zero, np.sin(half)), axis=-1)
+
+
+def heading_of(quat: FloatArray) -> FloatArray:
+    """Yaw of the body x axis projected on the ground."""
+    w, x, y, z = np.moveaxis(quat, -1, 0)
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def quat_to_rotvec(quat: FloatArray) -> FloatArray:
+    quat = np.where(quat[..., :1] < 0, -quat, quat)
+    vec = quat[..., 1:]
+    sin_half = np.linalg.norm(vec, axis=-1, keepdims=True)
+    angle = 2 * np.arctan2(sin_half, quat[..., :1])
+    scale = np.where(sin_half > 1e-9, angle / np.maximum(sin_half, 1e-12), 2.0)
+    return vec * scale
+
+
+def rotvec_to_quat(rotvec: FloatArray) -> FloatArray:
+    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    scale = np.where(angle > 1e-9, np.sin(angle / 2) / np.maximum(angle, 1e-12), 0.5)
+    return np.concatenate((np.cos(angle / 2), rotvec * scale), axis=-1)
+
+
+def rotate_xy(xy: FloatArray, yaw: FloatArray) -> FloatArray:
+    c, s = np.cos(yaw)[..., None], np.sin(yaw)[..., None]
+    x, y = xy[..., :1], xy[..., 1:2]
+    return np.concatenate((c * x - s * y, s * x + c * y), axis=-1)
+
+
+# ---- qpos <-> channels ---------------------------------------------------------------------
+
+
+def frame_origin(qpos: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The canonical frame of `qpos` [..., 36]: its root's horizontal position and heading."""
+    return qpos[..., :2], heading_of(qpos[..., 3:7])
+
+
+def to_channels(qpos: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
+    """Frames [..., T, 36] -> channels [..., T, 36] in the frame (origin_xy [..., 2], origin_yaw [...])."""
+    quat = qpos[..., 3:7]
+    heading = heading_of(quat)
+    tilt = quat_to_rotvec(quat_multiply(quat_from_yaw(-heading), quat))
+    relative = np.unwrap(heading - np.asarray(origin_yaw)[..., None], axis=-1)
+    relative = relative - 2 * np.pi * np.round(relative[..., -1:] / (2 * np.pi))  # the last frame's heading in (-pi, pi]
+    xy = rotate_xy(qpos[..., :2] - np.asarray(origin_xy)[..., None, :], -np.asarray(origin_yaw)[..., None])
+    return np.concatenate((xy, qpos[..., 2:3], relative[..., None], tilt, qpos[..., 7:]), axis=-1)
+
+
+def from_channels(channels: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
+    """Inverse of `to_channels`: unit quaternions, sign-continuous over time."""
+    yaw = channels[..., HEADING] + np.asarray(origin_yaw)[..., None]
+    quat = quat_multiply(quat_from_yaw(yaw), rotvec_to_quat(channels[..., TILT]))
+    quat /= np.linalg.norm(quat, axis=-1, keepdims=True)
+    flips = np.cumsum(np.sum(quat[..., 1:, :] * quat[..., :-1, :], axis=-1) < 0, axis=-1) % 2
+    quat[..., 1:, :] *= np.where(flips[..., None] == 1, -1.0, 1.0)
+    xy = rotate_xy(channels[..., ROOT_XY], np.asarray(origin_yaw)[..., None]) + np.asarray(origin_xy)[..., None, :]
+    return np.concatenate((xy, channels[..., ROOT_Z : ROOT_Z + 1], quat, channels[..., JOINTS]), axis=-1)
+
+
+# ---- anchors -------------------------------------------------------------------------------
+
+
+def anchor_curve(context: FloatArray, values: FloatArray, mask: NDArray[np.bool_]) -> tuple[FloatArray, FloatArray]:
+    """The curve the residual is added to, and the residual's window.
+
+    context [..., 4, C] channels; values/mask [..., F, C]: constraint values at plan frames
+    0..F-1 where mask is set. Before the first constraint of a channel the curve is a
+    cubic Hermite from the context's last frame (with its velocity) to that constraint
+    (arriving with the chord's velocity); between constraints it is linear; after the last
+    one it holds, except a never-constrained root position or heading, which keeps the
+    context's velocity. Returns (curve [..., F, C], window [..., F, C] in [0, 1]).
+    """
+    frames = values.shape[-2]
+    t = np.arange(frames, dtype=np.float64)[:, None]  # [F, 1]
+    start, velocity = context[..., -1:, :], context[..., -1:, :] - context[..., -2:-1, :]  # [..., 1, C]
+    big = float(frames + 1)
+    prev_t = np.maximum.accumulate(np.where(mask, t, -1.0), axis=-2)  # -1: the context's last frame
+    next_t = np.flip(np.minimum.accumulate(np.flip(np.where(mask, t, big), axis=-2), axis=-2), axis=-2)
+    prev_v = _take_at(values, prev_t, start)
+    next_v = _take_at(values, np.where(next_t < big, next_t, 0.0), start)
+    has_next = next_t < big
+    span = np.maximum(next_t - prev_t, 1.0)
+    u = (t - prev_t) / span
+    chord = next_v - prev_v
+    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+    first = h00 * prev_v + h10 * velocity * span + h01 * next_v + h11 * chord
+    between = prev_v + u * chord
+    inner = np.where(prev_t < 0, first, between)
+    drifting = np.zeros(values.shape[-1], dtype=bool)
+    drifting[[0, 1, HEADING]] = True
+    never = ~mask.any(axis=-2, keepdims=True) & drifting
+    tail = np.where(never, start + velocity * (t + 1.0), prev_v)
+    curve = np.where(has_next, inner, tail)
+    distance = np.minimum(t - prev_t, np.where(has_next, next_t - t, big))
+    ramp = np.clip(distance / RAMP_FRAMES, 0.0, 1.0)
+    return curve, ramp * ramp * (3 - 2 * ramp)
+
+
+def _take_at(values: FloatArray, frame: FloatArray, fallback: FloatArray) -> FloatArray:
+    """values[..., frame, c] per (frame, channel), `fallback` where frame is -1."""
+    index = np.clip(frame, 0, values.shape[-2] - 1).astype(np.intp)
+    taken = np.take_along_axis(values, index, axis=-2)
+    return np.where(frame < 0, fallback, taken)

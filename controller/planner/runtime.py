@@ -1,0 +1,91 @@
+"""The runtime planner: a plan request in, G1 `qpos` frames at 30 fps out, onnxruntime only.
+
+Per request: canonicalize the context and keyframes to the frame of the last context frame,
+build the anchor curve and the conditioning vector, draw the seed's noise, run the exported
+sampler (encoder once, a few flow steps, latent decode: one ONNX call), add the windowed
+residual to the curve, and map back to world `qpos`. Never imports torch.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import onnxruntime as ort
+
+from controller.planner import encoding as enc
+from controller.planner import features as ft
+from controller.planner.request import Plan, PlanRequest
+from hw.errors import AssetError
+
+DEFAULT_MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "planner"
+SPEC_VERSION = 1
+
+
+class Planner:
+    """Generative in-betweening planner loaded from a model folder (`planner.json` + `planner.onnx`)."""
+
+    def __init__(self, session: ort.InferenceSession, spec: dict[str, object]) -> None:
+        self._session = session
+        self.spec = spec
+        self.latent = int(spec["latent"])  # type: ignore[call-overload]
+
+    @classmethod
+    def load(cls, model_dir: Path | None = None, threads: int = 1) -> Planner:
+        folder = Path(model_dir) if model_dir is not None else DEFAULT_MODEL_DIR
+        spec_path = folder / "planner.json"
+        try:
+            spec = json.loads(spec_path.read_text())
+        except FileNotFoundError as exc:
+            raise AssetError(
+                f"no planner model in {folder} (planner.json missing); train one with 'g1ctl train planner' or pass --model"
+            ) from exc
+        except json.JSONDecodeError as exc:
+            raise AssetError(f"{spec_path} is not valid JSON ({exc}); restore it from the repository") from exc
+        expected = {"version": SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS}
+        wrong = {k: spec.get(k) for k, v in expected.items() if spec.get(k) != v}
+        if wrong:
+            raise AssetError(f"planner model in {folder} does not match this runtime ({wrong}, expected {expected}); retrain or update it")
+        options = ort.SessionOptions()
+        options.intra_op_num_threads = threads
+        options.inter_op_num_threads = 1
+        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+        options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+        try:
+            session = ort.InferenceSession(str(folder / spec["onnx"]), options, providers=["CPUExecutionProvider"])
+        except Exception as exc:  # onnxruntime raises its own untyped errors
+            raise AssetError(f"cannot load planner ONNX {folder / spec['onnx']}: {exc}") from exc
+        return cls(session, spec)
+
+    def plan(self, request: PlanRequest) -> Plan:
+        """One plan; raises PlanRequestError for an invalid request."""
+        started = time.perf_counter()
+        request = request.validated()
+        qpos, contacts = self.sample(request, [request.seed])
+        return Plan(qpos[0], contacts[0], (time.perf_counter() - started) * 1000.0)
+
+    def sample(self, request: PlanRequest, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """Plans for one validated request under several seeds in one batch: qpos [S, N, 36], contacts [S, N, 2]."""
+        length = request.plan_length()
+        origin_xy, origin_yaw = ft.frame_origin(request.context[-1])
+        context = ft.to_channels(request.context, origin_xy, origin_yaw)
+        values, mask = enc.request_constraints(request, origin_xy, origin_yaw)
+        curve, window = ft.anchor_curve(context, values, mask)
+        cond = enc.conditioning(context, curve, mask, np.array(length), request.text_embedding)
+        noise = np.stack([np.random.default_rng(s).standard_normal(self.latent) for s in seeds]).astype(np.float32)
+        cond_batch = np.broadcast_to(cond.astype(np.float32), (len(seeds), enc.COND_DIM))
+        (residual,) = self._session.run(None, {"cond": np.ascontiguousarray(cond_batch), "noise": noise})
+        channels = curve[:length] + window[:length] * residual[:, :length, : ft.NUM_CHANNELS]
+        qpos = ft.from_channels(channels, origin_xy, origin_yaw)
+        qpos = _continue_sign(qpos, request.context[-1])
+        contacts = residual[:, :length, ft.NUM_CHANNELS :] > 0.0
+        return qpos, contacts
+
+
+def _continue_sign(qpos: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """Flip plans whose root quaternion starts on the other hemisphere from the context's."""
+    flip = np.sum(qpos[..., :1, 3:7] * last[3:7], axis=-1, keepdims=True) < 0
+    qpos[..., 3:7] = np.where(flip, -qpos[..., 3:7], qpos[..., 3:7])
+    return qpos
