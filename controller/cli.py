@@ -7,6 +7,7 @@ Usage:
     g1ctl assets fetch [--assets-dir DIR]
     g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N]
     g1ctl bench hw [--report PATH] [--seconds 60]
+    g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S] --report PATH
     g1ctl hw scan|monitor|zero|sweep|damp|imu --hardware NAME   (bench bring-up, see hw_commands)
     g1ctl hw frame encode|decode --protocol mit|unitree-rs485 ...
     g1ctl scenarios            (list the shipped scenarios, policies and hardware configs)
@@ -26,7 +27,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from hw.errors import G1Error, HardwareFault
+from hw.errors import ConfigError, G1Error, HardwareFault
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -70,11 +71,23 @@ def _build_parser() -> argparse.ArgumentParser:
     hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
     hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
 
+    inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
+    inbetween.add_argument("--data", type=Path, default=None, help="recorded motion dataset (its test split is used)")
+    inbetween.add_argument("--methods", default="ours,interp,hermite,zerovel", help="comma-separated: ours, interp, hermite, zerovel")
+    inbetween.add_argument("--lengths", default="15,30,45", help="comma-separated transition lengths (frames at 30 fps)")
+    inbetween.add_argument("--windows", type=int, default=200, help="windows per length, at most")
+    inbetween.add_argument("--seed", type=int, default=0)
+    inbetween.add_argument("--model", type=Path, default=None, help="planner model folder for 'ours' (default: models/planner)")
+    inbetween.add_argument("--report", type=Path, default=None)
+
     sub.add_parser("scenarios", help="list shipped scenarios, policy presets and hardware configs")
 
     from controller.hw_commands import add_hw_parser  # noqa: PLC0415 - keeps `g1ctl --help` import-light
 
     add_hw_parser(sub)
+    from controller.planner_commands import add_planner_parsers  # noqa: PLC0415
+
+    add_planner_parsers(sub)
     return parser
 
 
@@ -104,6 +117,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from controller.hw_commands import run_hw  # noqa: PLC0415
 
         return run_hw(args)
+    if args.command in ("train", "viz"):
+        from controller import planner_commands  # noqa: PLC0415
+
+        return planner_commands.run_train(args) if args.command == "train" else planner_commands.run_viz(args)
     if args.command == "assets":
         from controller.assets import ensure_assets  # noqa: PLC0415
 
@@ -115,6 +132,8 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         _emit(run_hw_bench(args.seconds, args.raw_seconds, args.rt_priority), args.report)
         return 0
+    if args.command == "bench" and args.bench_command == "inbetween":
+        return _bench_inbetween(args)
     if args.command == "bench":
         from controller.bench import run_loop_bench  # noqa: PLC0415
 
@@ -158,6 +177,24 @@ def _sim(args: argparse.Namespace) -> int:
     if report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"):
         print(f"g1ctl: run ended damped: {report['damp_reason']}", file=sys.stderr)
         return 1
+    return 0
+
+
+def _bench_inbetween(args: argparse.Namespace) -> int:
+    from controller import bench_inbetween as bi  # noqa: PLC0415 - keeps `g1ctl --help` import-light
+
+    if args.data is None:
+        raise ConfigError("bench inbetween needs --data PATH: a recorded motion dataset")
+    cfg = bi.InbetweenConfig(
+        data=args.data, methods=bi.parse_methods(args.methods), lengths=bi.parse_lengths(args.lengths), windows=args.windows,
+        seed=args.seed, assets_dir=args.assets_dir, model_dir=args.model,
+    )  # fmt: skip
+    report = bi.run_inbetween_bench(cfg)
+    print(bi.format_table(report))
+    if args.report is not None:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps(report, indent=2) + "\n")
+        print(f"report: {args.report}")
     return 0
 
 

@@ -1,0 +1,107 @@
+"""Unit quaternions (w, x, y, z) in pure numpy, vectorized over leading dimensions.
+
+The convention is MuJoCo's: `q` rotates body coordinates into world coordinates, and a
+free joint's angular velocity is expressed in the body frame. q and -q are the same
+rotation; functions that compare or interpolate take the shorter way.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+_EPS = 1e-12
+
+
+def normalize(q: ArrayLike) -> FloatArray:
+    q = np.asarray(q, dtype=np.float64)
+    return q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), _EPS)
+
+
+def multiply(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """Hamilton product a * b (apply b, then a)."""
+    aw, ax, ay, az = np.moveaxis(np.asarray(a, dtype=np.float64), -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.asarray(b, dtype=np.float64), -1, 0)
+    return np.stack(
+        (
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ),
+        axis=-1,
+    )
+
+
+def conjugate(q: ArrayLike) -> FloatArray:
+    """The inverse of a unit quaternion."""
+    return np.asarray(q, dtype=np.float64) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:
+    """Rotate vectors v [..., 3] by q [..., 4]."""
+    v = np.asarray(v, dtype=np.float64)
+    qv = np.concatenate((np.zeros((*v.shape[:-1], 1)), v), axis=-1)
+    return multiply(multiply(q, qv), conjugate(q))[..., 1:]
+
+
+def log(q: ArrayLike) -> FloatArray:
+    """Rotation vector [..., 3] (axis * angle, angle in [0, pi]) of q [..., 4]."""
+    q = normalize(q)
+    q = np.where(q[..., :1] < 0, -q, q)
+    vec = q[..., 1:]
+    sin_half = np.linalg.norm(vec, axis=-1, keepdims=True)
+    angle = 2 * np.arctan2(sin_half, q[..., :1])
+    scale = np.where(sin_half > 1e-9, angle / np.maximum(sin_half, _EPS), 2.0)
+    return vec * scale
+
+
+def exp(rotvec: ArrayLike) -> FloatArray:
+    """Unit quaternion [..., 4] of a rotation vector [..., 3]."""
+    rotvec = np.asarray(rotvec, dtype=np.float64)
+    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    scale = np.where(angle > 1e-9, np.sin(angle / 2) / np.maximum(angle, _EPS), 0.5)
+    return np.concatenate((np.cos(angle / 2), rotvec * scale), axis=-1)
+
+
+def angle(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """Geodesic angle (rad, in [0, pi]) between the rotations a and b (accurate near 0, unlike arccos of the dot)."""
+    rel = multiply(conjugate(normalize(a)), normalize(b))
+    return 2 * np.arctan2(np.linalg.norm(rel[..., 1:], axis=-1), np.abs(rel[..., 0]))
+
+
+def slerp(a: ArrayLike, b: ArrayLike, t: ArrayLike) -> FloatArray:
+    """Spherical linear interpolation from a (t=0) to b (t=1) the short way; t broadcasts against [...]."""
+    a, b = normalize(a), normalize(b)
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    dot = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(dot < 0, -b, b)
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, 0.0, 1.0))
+    sin_theta = np.sin(theta)
+    close = sin_theta < 1e-6  # nearly equal: linear interpolation is exact to first order
+    safe = np.where(close, 1.0, sin_theta)
+    wa = np.where(close, 1.0 - t, np.sin((1.0 - t) * theta) / safe)
+    wb = np.where(close, t, np.sin(t * theta) / safe)
+    return normalize(wa * a + wb * b)
+
+
+def continuous(q: ArrayLike, axis: int = -2) -> FloatArray:
+    """Flip signs along `axis` (time) so that consecutive quaternions have a non-negative dot product."""
+    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0).copy()
+    for i in range(1, len(q)):
+        q[i] = np.where(np.sum(q[i] * q[i - 1], axis=-1, keepdims=True) < 0, -q[i], q[i])
+    return np.moveaxis(q, 0, axis)
+
+
+def heading(q: ArrayLike) -> FloatArray:
+    """Yaw (rad, in (-pi, pi]) of the body x axis projected on the ground plane."""
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def wrap_angle(a: ArrayLike) -> FloatArray:
+    """Angles wrapped into [-pi, pi)."""
+    return (np.asarray(a, dtype=np.float64) + np.pi) % (2 * np.pi) - np.pi
