@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.planner import quat
 from hw import g1
 
 FloatArray = NDArray[np.float64]
@@ -30,48 +31,13 @@ NUM_CHANNELS = 7 + g1.NUM_JOINTS
 RAMP_FRAMES = 6  # the residual window rises from 0 to 1 over this many frames away from a constraint
 
 
-# ---- rotations (quaternions w, x, y, z) ----------------------------------------------------
-
-
-def quat_multiply(a: FloatArray, b: FloatArray) -> FloatArray:
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack(
-        (
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ),
-        axis=-1,
-    )
+# ---- planar helpers --------------------------------------------------------------------
 
 
 def quat_from_yaw(yaw: FloatArray) -> FloatArray:
     half = np.asarray(yaw) / 2
     zero = np.zeros_like(half)
     return np.stack((np.cos(half), zero, zero, np.sin(half)), axis=-1)
-
-
-def heading_of(quat: FloatArray) -> FloatArray:
-    """Yaw of the body x axis projected on the ground."""
-    w, x, y, z = np.moveaxis(quat, -1, 0)
-    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
-def quat_to_rotvec(quat: FloatArray) -> FloatArray:
-    quat = np.where(quat[..., :1] < 0, -quat, quat)
-    vec = quat[..., 1:]
-    sin_half = np.linalg.norm(vec, axis=-1, keepdims=True)
-    angle = 2 * np.arctan2(sin_half, quat[..., :1])
-    scale = np.where(sin_half > 1e-9, angle / np.maximum(sin_half, 1e-12), 2.0)
-    return vec * scale
-
-
-def rotvec_to_quat(rotvec: FloatArray) -> FloatArray:
-    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
-    scale = np.where(angle > 1e-9, np.sin(angle / 2) / np.maximum(angle, 1e-12), 0.5)
-    return np.concatenate((np.cos(angle / 2), rotvec * scale), axis=-1)
 
 
 def rotate_xy(xy: FloatArray, yaw: FloatArray) -> FloatArray:
@@ -85,14 +51,14 @@ def rotate_xy(xy: FloatArray, yaw: FloatArray) -> FloatArray:
 
 def frame_origin(qpos: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The canonical frame of `qpos` [..., 36]: its root's horizontal position and heading."""
-    return qpos[..., :2], heading_of(qpos[..., 3:7])
+    return qpos[..., :2], quat.heading(qpos[..., 3:7])
 
 
 def to_channels(qpos: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
     """Frames [..., T, 36] -> channels [..., T, 36] in the frame (origin_xy [..., 2], origin_yaw [...])."""
-    quat = qpos[..., 3:7]
-    heading = heading_of(quat)
-    tilt = quat_to_rotvec(quat_multiply(quat_from_yaw(-heading), quat))
+    rotation = qpos[..., 3:7]
+    heading = quat.heading(rotation)
+    tilt = quat.log(quat.multiply(quat_from_yaw(-heading), rotation))
     relative = np.unwrap(heading - np.asarray(origin_yaw)[..., None], axis=-1)
     relative = relative - 2 * np.pi * np.round(relative[..., -1:] / (2 * np.pi))  # the last frame's heading in (-pi, pi]
     xy = rotate_xy(qpos[..., :2] - np.asarray(origin_xy)[..., None, :], -np.asarray(origin_yaw)[..., None])
@@ -102,12 +68,9 @@ def to_channels(qpos: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray)
 def from_channels(channels: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
     """Inverse of `to_channels`: unit quaternions, sign-continuous over time."""
     yaw = channels[..., HEADING] + np.asarray(origin_yaw)[..., None]
-    quat = quat_multiply(quat_from_yaw(yaw), rotvec_to_quat(channels[..., TILT]))
-    quat /= np.linalg.norm(quat, axis=-1, keepdims=True)
-    flips = np.cumsum(np.sum(quat[..., 1:, :] * quat[..., :-1, :], axis=-1) < 0, axis=-1) % 2
-    quat[..., 1:, :] *= np.where(flips[..., None] == 1, -1.0, 1.0)
+    rotation = quat.continuous(quat.normalize(quat.multiply(quat_from_yaw(yaw), quat.exp(channels[..., TILT]))))
     xy = rotate_xy(channels[..., ROOT_XY], np.asarray(origin_yaw)[..., None]) + np.asarray(origin_xy)[..., None, :]
-    return np.concatenate((xy, channels[..., ROOT_Z : ROOT_Z + 1], quat, channels[..., JOINTS]), axis=-1)
+    return np.concatenate((xy, channels[..., ROOT_Z : ROOT_Z + 1], rotation, channels[..., JOINTS]), axis=-1)
 
 
 # ---- anchors -------------------------------------------------------------------------------

@@ -156,7 +156,7 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
         codec, cond_stats, explained = _fit_statistics(train, cfg)
     net = FlowNet(cfg, *cond_stats)
     optimizer = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=1e-4)
-    schedule = torch.optim.lr_scheduler.OneCycleLR(optimizer, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.05)
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: _learning_rate_factor(s, cfg.steps))
     rng = np.random.default_rng(cfg.seed + 1)
     step, elapsed_before, history = 0, 0.0, []
     if state is not None:
@@ -252,6 +252,12 @@ def _fit_statistics(train: WindowSampler, cfg: TrainConfig) -> tuple[LatentCodec
     codec, explained = LatentCodec.fit(residuals, cfg.latent)
     log.info("latent of %d components keeps %.1f%% of the residual variance", cfg.latent, 100 * explained)
     return codec, (conds.mean(axis=0), conds.std(axis=0) + 1e-3), explained
+
+
+def _learning_rate_factor(step: int, total: int) -> float:
+    """Linear warm-up over the first 5% of steps, then a cosine decay to zero."""
+    warmup = max(total // 20, 1)
+    return min(1.0, (step + 1) / warmup) * 0.5 * (1.0 + math.cos(math.pi * min(step / total, 1.0)))
 
 
 def _flow_loss(net: FlowNet, x1: torch.Tensor, cond: torch.Tensor) -> torch.Tensor:

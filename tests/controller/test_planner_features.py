@@ -7,6 +7,7 @@ import pytest
 
 from controller.planner import encoding as enc
 from controller.planner import features as ft
+from controller.planner import quat
 from controller.planner.request import Keyframe, PlanRequest, PlanRequestError, target_root
 from hw import g1
 
@@ -20,8 +21,8 @@ def _walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: int = 0
     qpos[:, 0] = 5.0 + np.cumsum(0.03 * np.cos(yaw))
     qpos[:, 1] = -3.0 + np.cumsum(0.03 * np.sin(yaw))
     qpos[:, 2] = 0.78 + 0.01 * np.sin(t / 3)
-    tilt = ft.rotvec_to_quat(np.stack((0.05 * np.sin(t / 5), 0.03 * np.cos(t / 4), np.zeros(frames)), axis=-1))
-    qpos[:, 3:7] = ft.quat_multiply(ft.quat_from_yaw(yaw), tilt)
+    tilt = quat.exp(np.stack((0.05 * np.sin(t / 5), 0.03 * np.cos(t / 4), np.zeros(frames)), axis=-1))
+    qpos[:, 3:7] = quat.multiply(ft.quat_from_yaw(yaw), tilt)
     qpos[:, 7:] = 0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS))
     return qpos
 
@@ -42,7 +43,7 @@ def test_channels_do_not_depend_on_where_the_robot_stands() -> None:
     qpos = _walk()
     moved = qpos.copy()
     moved[:, :2] = ft.rotate_xy(qpos[:, :2], np.full(len(qpos), 1.3)) + np.array([10.0, 4.0])
-    moved[:, 3:7] = ft.quat_multiply(ft.quat_from_yaw(np.full(len(qpos), 1.3)), qpos[:, 3:7])
+    moved[:, 3:7] = quat.multiply(ft.quat_from_yaw(np.full(len(qpos), 1.3)), qpos[:, 3:7])
     a = ft.to_channels(qpos, *ft.frame_origin(qpos[3]))
     b = ft.to_channels(moved, *ft.frame_origin(moved[3]))
     assert np.allclose(a, b, atol=1e-9)
