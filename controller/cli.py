@@ -10,6 +10,7 @@ Usage:
     g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S] --report PATH
     g1ctl hw scan|monitor|zero|sweep|damp|imu --hardware NAME   (bench bring-up, see hw_commands)
     g1ctl hw frame encode|decode --protocol mit|unitree-rs485 ...
+    g1ctl dataset record|import|info ...   (the planner's motion dataset, see dataset_commands)
     g1ctl scenarios            (list the shipped scenarios, policies and hardware configs)
 
 Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
@@ -88,6 +89,9 @@ def _build_parser() -> argparse.ArgumentParser:
     from controller.planner_commands import add_planner_parsers  # noqa: PLC0415
 
     add_planner_parsers(sub)
+    from controller.dataset_commands import add_dataset_parser  # noqa: PLC0415
+
+    add_dataset_parser(sub)
     return parser
 
 
@@ -117,6 +121,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from controller.hw_commands import run_hw  # noqa: PLC0415
 
         return run_hw(args)
+    if args.command == "dataset":
+        from controller.dataset_commands import run_dataset  # noqa: PLC0415
+
+        return run_dataset(args)
     if args.command in ("train", "viz"):
         from controller import planner_commands  # noqa: PLC0415
 
