@@ -493,8 +493,10 @@ def record(cfg: RecordConfig) -> dict[str, Any]:
             rng = np.random.default_rng([seed, 1])
             length = float(rng.uniform(lo, hi))
             remaining = target - kept
-            if remaining - length < lo / 2:
-                length = remaining
+            if remaining <= hi:
+                length = remaining  # the last episode
+            elif remaining - length < lo:
+                length = remaining / 2  # no short last episode: two halves within [lo, hi] (when hi >= 2 lo)
             episode = recorder.episode(seed, length, on_tick)
             index += 1
             sim_seconds += episode.sim_seconds
