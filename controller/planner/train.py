@@ -16,6 +16,7 @@ import json
 import logging
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -35,6 +36,7 @@ CHECKPOINT = "checkpoint.pt"
 ONNX_FILE = "planner.onnx"
 SPEC_FILE = "planner.json"
 SPEC_VERSION = 1
+MODEL_KEYS = ("batch", "lr", "width", "depth", "latent", "pca_windows", "seed")  # a resumed run may change the rest (steps, threads)
 
 
 @dataclass(frozen=True)
@@ -147,8 +149,9 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
     started = time.monotonic()
     if checkpoint_path.is_file():
         state = torch.load(checkpoint_path, weights_only=False)
-        if state["config"] != asdict(cfg):
-            raise ConfigError(f"{checkpoint_path} was trained with other settings {state['config']}; use a new --out or the same settings")
+        changed = {k: state["config"][k] for k in MODEL_KEYS if state["config"][k] != getattr(cfg, k)}
+        if changed:
+            raise ConfigError(f"{checkpoint_path} holds a model with other settings {changed}; use a new --out or the same settings")
         codec, cond_stats, explained = state["codec"], state["cond_stats"], state["explained"]
         log.info("resuming from step %d", state["step"])
     else:
@@ -177,7 +180,7 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
         optimizer.step()
         schedule.step()
         step += 1
-        running = 0.98 * running + 0.02 * float(loss) if step > 1 else float(loss)
+        running = 0.98 * running + 0.02 * loss.item() if step > 1 else loss.item()
         bar.update(1)
         bar.set_postfix(loss=f"{running:.3f}")
         if step % cfg.checkpoint_every == 0 or step == cfg.steps:
@@ -218,7 +221,8 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
     cond = torch.zeros(1, enc.COND_DIM)
     noise = torch.zeros(1, cfg.latent)
     path = out_dir / ONNX_FILE
-    with torch.no_grad():
+    with torch.no_grad(), warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # the TorchScript exporter: no extra dependency, exact graph
         torch.onnx.export(
             sampler, (cond, noise), str(path), input_names=["cond", "noise"], output_names=["residual"],
             dynamic_axes={"cond": {0: "batch"}, "noise": {0: "batch"}, "residual": {0: "batch"}}, opset_version=17, dynamo=False,
