@@ -28,7 +28,7 @@ HEADING = 3
 TILT = slice(4, 7)
 JOINTS = slice(7, 7 + g1.NUM_JOINTS)
 NUM_CHANNELS = 7 + g1.NUM_JOINTS
-RAMP_FRAMES = 6  # the residual window rises from 0 to 1 over this many frames away from a constraint
+RAMP_FRAMES = 4  # the residual window rises from 0 to 1 over this many frames away from a constraint
 
 
 # ---- planar helpers --------------------------------------------------------------------

@@ -46,7 +46,7 @@ class TrainConfig:
     lr: float = 1e-3
     width: int = 512
     depth: int = 3
-    latent: int = 96
+    latent: int = 128
     sampling_steps: int = 8
     pca_windows: int = 20000
     seed: int = 0

@@ -61,7 +61,7 @@ def test_anchor_curve_meets_constraints_and_continues_the_context() -> None:
     start_velocity = context[0, -1] - context[0, -2]
     root = [0, 1, ft.HEADING]  # constrained 41 frames on: the curve leaves the context at the context's velocity
     assert np.allclose(curve[0, 0, root] - context[0, -1, root], start_velocity[root], atol=2e-3)
-    assert window[0, 0].max() < 0.1  # the residual fades in from the context
+    assert window[0, 0].max() < 0.2  # the residual fades in from the context
     unconstrained = np.zeros_like(mask)
     drift, _ = ft.anchor_curve(context, truth, unconstrained)
     assert np.allclose(drift[0, 9, 0], context[0, -1, 0] + 10 * start_velocity[0])  # a free root keeps its velocity
