@@ -97,7 +97,9 @@ def render_poses(model: mujoco.MjModel, poses: np.ndarray, lookat: np.ndarray, w
     camera = mujoco.MjvCamera()
     camera.type = mujoco.mjtCamera.mjCAMERA_FREE
     camera.lookat[:] = lookat
-    camera.distance, camera.azimuth, camera.elevation = 3.2, 120.0, -15.0
+    camera.distance, camera.azimuth, camera.elevation = 2.4, 120.0, -10.0
+    model.vis.headlight.ambient[:] = 0.45  # the side view faces away from the scene light
+    model.vis.headlight.diffuse[:] = 0.6
     images = []
     try:
         for qpos in poses:

@@ -90,10 +90,10 @@ def slerp(a: ArrayLike, b: ArrayLike, t: ArrayLike) -> FloatArray:
 
 def continuous(q: ArrayLike, axis: int = -2) -> FloatArray:
     """Flip signs along `axis` (time) so that consecutive quaternions have a non-negative dot product."""
-    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0).copy()
-    for i in range(1, len(q)):
-        q[i] = np.where(np.sum(q[i] * q[i - 1], axis=-1, keepdims=True) < 0, -q[i], q[i])
-    return np.moveaxis(q, 0, axis)
+    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0)
+    flips = np.sum(q[1:] * q[:-1], axis=-1, keepdims=True) < 0  # a flip at i changes the sign of every later frame
+    sign = np.concatenate((np.ones_like(flips[:1], dtype=np.float64), np.where(np.cumsum(flips, axis=0) % 2 == 1, -1.0, 1.0)))
+    return np.moveaxis(q * sign, 0, axis)
 
 
 def heading(q: ArrayLike) -> FloatArray:

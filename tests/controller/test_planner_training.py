@@ -16,6 +16,7 @@ from controller.planner.request import Keyframe, PlanRequest, PlanRequestError, 
 from controller.planner.runtime import Planner
 from hw.errors import AssetError
 from tests.controller.test_planner_features import _walk
+from tests.test_cli import g1ctl, one_line_error
 
 torch = pytest.importorskip("torch")
 
@@ -74,3 +75,12 @@ def test_runtime_never_imports_torch(tiny_model: Path) -> None:
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "False"
+
+
+def test_viz_plan_draws_a_filmstrip_and_names_bad_input(tiny_model: Path, tmp_path: Path) -> None:
+    out = tmp_path / "plan.png"
+    result = g1ctl("viz", "plan", "--model", str(tiny_model), "--out", str(out), "--seeds", "2", "--length", "24")
+    assert result.returncode == 0, result.stderr
+    assert out.stat().st_size > 10_000
+    assert "--out must end in .png, .mp4 or .gif" in one_line_error(g1ctl("viz", "plan", "--model", str(tiny_model), "--out", "plan.txt"))
+    assert "--target must be x,y,heading" in one_line_error(g1ctl("viz", "plan", "--model", str(tiny_model), "--out", str(out), "--target", "1,2"))
