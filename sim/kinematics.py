@@ -28,9 +28,7 @@ class G1Kinematics:
         self.model = build_model(mjcf_path)
         self._data = mujoco.MjData(self.model)
         # Body 0 is the world; the foot contact points are frames, not links.
-        self.body_names = tuple(
-            self.model.body(i).name for i in range(1, self.model.nbody) if self.model.body(i).name not in FOOT_BODIES
-        )
+        self.body_names = tuple(self.model.body(i).name for i in range(1, self.model.nbody) if self.model.body(i).name not in FOOT_BODIES)
         self._bodies = np.array([self.model.body(n).id for n in self.body_names])
         self._feet = np.array([self.model.body(n).id for n in FOOT_BODIES])
 

@@ -83,4 +83,5 @@ def test_viz_plan_draws_a_filmstrip_and_names_bad_input(tiny_model: Path, tmp_pa
     assert result.returncode == 0, result.stderr
     assert out.stat().st_size > 10_000
     assert "--out must end in .png, .mp4 or .gif" in one_line_error(g1ctl("viz", "plan", "--model", str(tiny_model), "--out", "plan.txt"))
-    assert "--target must be x,y,heading" in one_line_error(g1ctl("viz", "plan", "--model", str(tiny_model), "--out", str(out), "--target", "1,2"))
+    bad_target = g1ctl("viz", "plan", "--model", str(tiny_model), "--out", str(out), "--target", "1,2")
+    assert "--target must be x,y,heading" in one_line_error(bad_target)
