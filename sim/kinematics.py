@@ -56,3 +56,25 @@ def foot_contacts(feet: FloatArray, height: float = CONTACT_HEIGHT_M) -> NDArray
     contact = low.copy()
     contact[:-1] &= low[1:]
     return contact
+
+
+LEG_LINKS = ("hip_pitch_link", "hip_roll_link", "hip_yaw_link", "knee_link", "ankle_pitch_link", "ankle_roll_link")
+
+
+def leg_chain_specs(model: mujoco.MjModel) -> list[dict[str, list[list[float]] | list[float]]]:
+    """Left and right leg chains as plain lists (link offsets, fixed rotations, joint axes, sole point) for the planner's spec."""
+    specs = []
+    for side in ("left", "right"):
+        links = [model.body(f"{side}_{name}") for name in LEG_LINKS]
+        joints = [int(np.flatnonzero(model.jnt_bodyid == link.id)[0]) for link in links]
+        if any(model.jnt_pos[j].any() for j in joints):
+            raise ConfigError("the planner's leg chains assume each leg joint sits at its link's origin")
+        specs.append(
+            {
+                "offsets": [link.pos.tolist() for link in links],
+                "quats": [link.quat.tolist() for link in links],
+                "axes": [model.jnt_axis[j].tolist() for j in joints],
+                "sole": model.body(f"{side}_foot_contact_point").pos.tolist(),
+            }
+        )
+    return specs

@@ -11,12 +11,14 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import onnxruntime as ort
 
 from controller.planner import encoding as enc
 from controller.planner import features as ft
+from controller.planner.foot_lock import LegChains, lock_feet
 from controller.planner.request import Plan, PlanRequest
 from hw.errors import AssetError
 
@@ -27,13 +29,14 @@ SPEC_VERSION = 1
 class Planner:
     """Generative in-betweening planner loaded from a model folder (`planner.json` + `planner.onnx`)."""
 
-    def __init__(self, session: ort.InferenceSession, spec: dict[str, object]) -> None:
+    def __init__(self, session: ort.InferenceSession, spec: dict[str, Any], foot_lock: bool = True) -> None:
         self._session = session
         self.spec = spec
-        self.latent = int(spec["latent"])  # type: ignore[call-overload]
+        self.latent = int(spec["latent"])
+        self.legs = LegChains.from_spec(spec["legs"]) if foot_lock else None
 
     @classmethod
-    def load(cls, model_dir: Path | None = None, threads: int = 1) -> Planner:
+    def load(cls, model_dir: Path | None = None, threads: int = 1, foot_lock: bool = True) -> Planner:
         folder = Path(model_dir) if model_dir is not None else DEFAULT_MODEL_DIR
         spec_path = folder / "planner.json"
         try:
@@ -44,6 +47,8 @@ class Planner:
             ) from exc
         except json.JSONDecodeError as exc:
             raise AssetError(f"{spec_path} is not valid JSON ({exc}); restore it from the repository") from exc
+        if "legs" not in spec or len(spec["legs"]) != 2:
+            raise AssetError(f"{spec_path} has no leg chains for foot locking; re-export the model with 'g1ctl train planner'")
         expected = {"version": SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS}
         wrong = {k: spec.get(k) for k, v in expected.items() if spec.get(k) != v}
         if wrong:
@@ -57,7 +62,7 @@ class Planner:
             session = ort.InferenceSession(str(folder / spec["onnx"]), options, providers=["CPUExecutionProvider"])
         except Exception as exc:  # onnxruntime raises its own untyped errors
             raise AssetError(f"cannot load planner ONNX {folder / spec['onnx']}: {exc}") from exc
-        return cls(session, spec)
+        return cls(session, spec, foot_lock)
 
     def plan(self, request: PlanRequest) -> Plan:
         """One plan; raises PlanRequestError for an invalid request."""
@@ -81,6 +86,9 @@ class Planner:
         qpos = ft.from_channels(channels, origin_xy, origin_yaw)
         qpos = _continue_sign(qpos, request.context[-1])
         contacts = residual[:, :length, ft.NUM_CHANNELS :] > 0.0
+        if self.legs is not None:
+            legs_fixed = np.stack((mask[:length, ft.JOINTS][:, :6].any(axis=-1), mask[:length, ft.JOINTS][:, 6:12].any(axis=-1)), axis=-1)
+            qpos = lock_feet(qpos, contacts, self.legs, request.context[-1], legs_fixed)
         return qpos, contacts
 
 

@@ -19,6 +19,7 @@ import time
 import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -236,9 +237,19 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
         "out_channels": enc.OUT_CHANNELS,
         "sampling_steps": cfg.sampling_steps,
         "fps": 30,
+        "legs": _leg_chains(),
     }
     (out_dir / SPEC_FILE).write_text(json.dumps(spec, indent=2) + "\n")
     return path
+
+
+def _leg_chains() -> list[dict[str, Any]]:
+    """The G1 leg chains for the runtime's foot locking, read from the same MJCF the data was recorded with."""
+    from controller.assets import ensure_assets  # noqa: PLC0415
+    from sim.kinematics import leg_chain_specs  # noqa: PLC0415 - imports MuJoCo
+    from sim.world import build_model  # noqa: PLC0415
+
+    return leg_chain_specs(build_model(ensure_assets(quiet=True).g1_mjcf))
 
 
 def _sampler(data_dirs: list[Path], split: str) -> WindowSampler:
