@@ -76,8 +76,10 @@ def request_constraints(request: PlanRequest, origin_xy: FloatArray, origin_yaw:
     """Keyframes of a validated request as channel values and mask [F, C] in the canonical frame."""
     values = np.zeros((FRAMES, ft.NUM_CHANNELS))
     mask = np.zeros((FRAMES, ft.NUM_CHANNELS), dtype=bool)
+    if request.keyframes:  # one batched conversion: each keyframe is its own one-frame sequence
+        frames = [key.frame for key in request.keyframes]
+        values[frames] = ft.to_channels(np.stack([key.qpos for key in request.keyframes])[:, None], origin_xy, origin_yaw)[:, 0]
     for key in request.keyframes:
-        values[key.frame] = ft.to_channels(key.qpos[None], origin_xy, origin_yaw)[0]
         mask[key.frame, ft.JOINTS] = key.joints
         if key.root:
             mask[key.frame, [0, 1, ft.HEADING]] = True

@@ -78,7 +78,7 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     rows_pos = np.concatenate((np.repeat(qpos[..., :3].reshape(-1, 3), 2, axis=0), np.tile(context_last[:3], (2, 1))))
     rows_rot = np.concatenate((np.repeat(root_rot.reshape(-1, 3, 3), 2, axis=0), np.tile(_matrices(context_last[3:7]), (2, 1, 1))))
     rows_leg = np.concatenate((np.tile(both, seeds * frames), both))
-    soles, _, _ = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
+    soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
     sole, context_sole = soles[:-2].reshape(seeds, frames, 2, 3), soles[-2:]
     target = sole.copy()
     weight = np.zeros((seeds, frames, 2))
@@ -103,8 +103,11 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     start_q = qpos[seed_idx[:, None], frame_idx[:, None], columns]
     q, goal = start_q.copy(), target[active]
     base_pos, base_rot = qpos[seed_idx, frame_idx, :3], root_rot[seed_idx, frame_idx]
-    for _ in range(ITERATIONS):
-        current, joint_pos, axes = legs.forward(base_pos, base_rot, q, leg_idx)
+    row = (seed_idx * frames + frame_idx) * 2 + leg_idx  # the first pass already holds each active row's kinematics
+    current, joint_pos, axes = soles[row], all_joints[row], all_axes[row]
+    for iteration in range(ITERATIONS):
+        if iteration:
+            current, joint_pos, axes = legs.forward(base_pos, base_rot, q, leg_idx)
         jacobian = np.cross(axes, current[:, None, :] - joint_pos).transpose(0, 2, 1)  # [K, 3, 6]
         gram = jacobian @ jacobian.transpose(0, 2, 1) + DAMPING**2 * np.eye(3)
         step = np.linalg.solve(gram, (goal - current)[..., None])  # [K, 3, 1]
