@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install install-train demo test lint bench clean
+.PHONY: install install-train demo test lint bench planner-data planner bench-planner clean
 
 install: $(STAMP)
 
@@ -32,6 +32,21 @@ lint: install
 
 bench: install
 	$(BIN)/g1ctl bench loop --report runs/bench_loop.json
+
+# The shipped planner, reproduced: record and import the data, train, benchmark (see models/planner/MODEL_CARD.md).
+G1_MOVES ?= ../shared/data/g1-moves
+DATA := data
+planner-data: install
+	test -f $(DATA)/rec/manifest.json || $(BIN)/g1ctl dataset record --out $(DATA)/rec --minutes 40 --seed 1 --progress
+	test -f $(DATA)/rec2/manifest.json || $(BIN)/g1ctl dataset record --out $(DATA)/rec2 --minutes 80 --seed 2 --progress
+	test -f $(DATA)/g1-moves/manifest.json || $(BIN)/g1ctl dataset import --csv $(G1_MOVES) --out $(DATA)/g1-moves
+
+planner: install-train planner-data
+	$(BIN)/g1ctl train planner --data $(DATA)/rec --data $(DATA)/rec2 --data $(DATA)/g1-moves --out runs/planner
+
+bench-planner: install
+	$(BIN)/g1ctl bench inbetween --data $(DATA)/rec --report runs/bench_inbetween.json
+	$(BIN)/g1ctl bench inbetween --data $(DATA)/g1-moves --report runs/bench_inbetween_g1moves.json
 
 clean:
 	rm -rf runs $(VENV)
