@@ -253,10 +253,10 @@ def _leg_chains() -> list[dict[str, Any]]:
 
 
 def _sampler(data_dirs: list[Path], split: str) -> WindowSampler:
-    clips = [(c.qpos, c.contacts.astype(np.float64)) for d in data_dirs for c in load_dataset(d, split=split)]
-    if not clips:
+    groups = [[(c.qpos, c.contacts.astype(np.float64)) for c in load_dataset(d, split=split)] for d in data_dirs]
+    if not any(groups):
         raise ConfigError(f"no '{split}' clips in {', '.join(map(str, data_dirs))}; record one with 'g1ctl dataset record'")
-    return WindowSampler(clips)
+    return WindowSampler(groups)
 
 
 def _fit_statistics(train: WindowSampler, cfg: TrainConfig) -> tuple[LatentCodec, tuple[np.ndarray, np.ndarray], float]:

@@ -31,14 +31,25 @@ class WindowBatch:
 
 
 class WindowSampler:
-    """Draws batches from clips (`qpos` [T, 36] and `contacts` [T, 2] at 30 fps)."""
+    """Draws batches from clips (`qpos` [T, 36] and `contacts` [T, 2] at 30 fps).
 
-    def __init__(self, clips: list[tuple[FloatArray, FloatArray]], min_frames: int = CONTEXT_FRAMES + ALLOWED_LENGTHS[0]) -> None:
-        self.clips = [(np.asarray(q, dtype=np.float64), np.asarray(c, dtype=np.float64)) for q, c in clips if len(q) >= min_frames]
+    Clips come in groups (one per dataset folder); each group gets an equal share of the
+    windows, and within a group a clip's share follows its length. Without this, an hour of
+    recorded walking would drown a quarter hour of motion capture.
+    """
+
+    def __init__(self, groups: list[list[tuple[FloatArray, FloatArray]]], min_frames: int = CONTEXT_FRAMES + ALLOWED_LENGTHS[0]) -> None:
+        self.clips: list[tuple[FloatArray, FloatArray]] = []
+        weights: list[FloatArray] = []
+        for group in groups:
+            kept = [(np.asarray(q, dtype=np.float64), np.asarray(c, dtype=np.float64)) for q, c in group if len(q) >= min_frames]
+            if kept:
+                sizes = np.array([len(q) - min_frames + 1 for q, _ in kept], dtype=np.float64)
+                self.clips += kept
+                weights.append(sizes / sizes.sum())
         if not self.clips:
             raise ValueError(f"no clip has the {min_frames} frames a training window needs")
-        sizes = np.array([len(q) - min_frames + 1 for q, _ in self.clips], dtype=np.float64)
-        self._weights = sizes / sizes.sum()
+        self._weights = np.concatenate(weights) / len(weights)
 
     def sample(self, rng: np.random.Generator, batch: int) -> WindowBatch:
         span = CONTEXT_FRAMES + enc.FRAMES
