@@ -1,6 +1,6 @@
 """Random training windows: context, plan frames, and the constraints a request could carry.
 
-Each window is cut at a random place of a random clip (weighted by length) and gets a
+Each window is cut at a random place of a random clip (see `WindowSampler` for the shares) and gets a
 random plan length and a random constraint set shaped like the requests the planner will
 meet: a target root (and often the full pose) at or near the last frame, sometimes partial
 pose keyframes earlier (arms only, legs only, ...). Everything is numpy and batched.
