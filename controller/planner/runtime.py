@@ -33,6 +33,7 @@ class Planner:
         self._session = session
         self.spec = spec
         self.latent = int(spec["latent"])
+        self.temperature = float(spec["temperature"])  # noise scale: below 1 trades diversity for likelihood
         self.legs = LegChains.from_spec(spec["legs"]) if foot_lock else None
 
     @classmethod
@@ -79,7 +80,8 @@ class Planner:
         values, mask = enc.request_constraints(request, origin_xy, origin_yaw)
         curve, window = ft.anchor_curve(context, values, mask)
         cond = enc.conditioning(context, curve, mask, np.array(length), request.text_embedding)
-        noise = np.stack([np.random.default_rng(s).standard_normal(self.latent) for s in seeds]).astype(np.float32)
+        noise = self.temperature * np.stack([np.random.default_rng(s).standard_normal(self.latent) for s in seeds])
+        noise = noise.astype(np.float32)
         cond_batch = np.broadcast_to(cond.astype(np.float32), (len(seeds), enc.COND_DIM))
         (residual,) = self._session.run(None, {"cond": np.ascontiguousarray(cond_batch), "noise": noise})
         channels = curve[:length] + window[:length] * residual[:, :length, : ft.NUM_CHANNELS]

@@ -49,6 +49,7 @@ class TrainConfig:
     depth: int = 3
     latent: int = 128
     sampling_steps: int = 8
+    temperature: float = 0.5  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
     pca_windows: int = 20000
     seed: int = 0
     threads: int = 2
@@ -236,6 +237,7 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
         "frames": enc.FRAMES,
         "out_channels": enc.OUT_CHANNELS,
         "sampling_steps": cfg.sampling_steps,
+        "temperature": cfg.temperature,
         "fps": 30,
         "legs": _leg_chains(),
     }
