@@ -40,6 +40,7 @@ def add_planner_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]
     plan.add_argument("--length", type=int, default=44, help="plan length in frames (multiple of 4, 24-64)")
     plan.add_argument("--seeds", type=int, default=4)
     plan.add_argument("--seed", type=int, default=0, help="which window of the data")
+    plan.add_argument("--temperature", type=float, default=None, help="sampling noise scale (default: the model's; higher varies more)")
 
 
 def run_train(args: argparse.Namespace) -> int:
@@ -79,7 +80,7 @@ def run_viz(args: argparse.Namespace) -> int:
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
     scene = _scene_from_data(args) if args.data is not None else _scene_from_target(args)
-    planner = Planner.load(args.model)
+    planner = Planner.load(args.model, temperature=args.temperature)
     request = PlanRequest(scene.context, scene.request_keyframes, (args.length,)).validated()
     plans, _ = planner.sample(request, list(range(args.seeds)))
     rows = {f"seed {s}": p for s, p in enumerate(plans)}

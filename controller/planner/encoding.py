@@ -72,13 +72,18 @@ def residual_target(truth: FloatArray, contacts: FloatArray, curve: FloatArray, 
     return np.where(valid[..., None], residual, 0.0)
 
 
-def request_constraints(request: PlanRequest, origin_xy: FloatArray, origin_yaw: FloatArray) -> tuple[FloatArray, BoolArray]:
-    """Keyframes of a validated request as channel values and mask [F, C] in the canonical frame."""
+def request_channels(request: PlanRequest) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
+    """Canonical frame (origin xy, yaw), context channels [4, C], keyframe values and mask [F, C] of a validated request.
+
+    Context and keyframes go through one conversion, each frame on its own: 4 context frames
+    (0.1 s) cannot turn by half a revolution, so no unwrapping is lost.
+    """
+    origin_xy, origin_yaw = ft.frame_origin(request.context[-1])
+    frames = np.concatenate((request.context, [key.qpos for key in request.keyframes])) if request.keyframes else request.context
+    channels = ft.to_channels(frames[:, None], origin_xy, origin_yaw)[:, 0]
     values = np.zeros((FRAMES, ft.NUM_CHANNELS))
     mask = np.zeros((FRAMES, ft.NUM_CHANNELS), dtype=bool)
-    if request.keyframes:  # one batched conversion: each keyframe is its own one-frame sequence
-        frames = [key.frame for key in request.keyframes]
-        values[frames] = ft.to_channels(np.stack([key.qpos for key in request.keyframes])[:, None], origin_xy, origin_yaw)[:, 0]
+    values[[key.frame for key in request.keyframes]] = channels[CONTEXT_FRAMES:]
     for key in request.keyframes:
         mask[key.frame, ft.JOINTS] = key.joints
         if key.root:
@@ -86,7 +91,7 @@ def request_constraints(request: PlanRequest, origin_xy: FloatArray, origin_yaw:
         if key.root_height:
             mask[key.frame, ft.ROOT_Z] = True
             mask[key.frame, ft.TILT] = True
-    return values, mask
+    return np.array([*origin_xy, origin_yaw]), channels[:CONTEXT_FRAMES], values, mask
 
 
 def joint_group_mask(rng: np.random.Generator) -> NDArray[np.bool_]:

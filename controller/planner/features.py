@@ -91,17 +91,16 @@ def anchor_curve(context: FloatArray, values: FloatArray, mask: NDArray[np.bool_
     start, velocity = context[..., -1:, :], context[..., -1:, :] - context[..., -2:-1, :]  # [..., 1, C]
     big = float(frames + 1)
     prev_t = np.maximum.accumulate(np.where(mask, t, -1.0), axis=-2)  # -1: the context's last frame
-    next_t = np.flip(np.minimum.accumulate(np.flip(np.where(mask, t, big), axis=-2), axis=-2), axis=-2)
-    prev_v = _take_at(values, prev_t, start)
-    next_v = _take_at(values, np.where(next_t < big, next_t, 0.0), start)
+    next_t = np.minimum.accumulate(np.where(mask, t, big)[..., ::-1, :], axis=-2)[..., ::-1, :]
     has_next = next_t < big
+    prev_v = _take_at(values, prev_t, start)
+    next_v = _take_at(values, np.where(has_next, next_t, 0.0), start)
     span = np.maximum(next_t - prev_t, 1.0)
     u = (t - prev_t) / span
-    chord = next_v - prev_v
-    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-    first = h00 * prev_v + h10 * velocity * span + h01 * next_v + h11 * chord
-    between = prev_v + u * chord
-    inner = np.where(prev_t < 0, first, between)
+    # Hermite from (p0, slope v * span) to (p1, slope chord) is p0 + u^2 (2 - u) chord + u (1 - u)^2 v span; later segments are linear.
+    in_first = prev_t < 0
+    slope_part = np.where(in_first, u * (1.0 - u) ** 2 * span, 0.0) * velocity
+    inner = prev_v + np.where(in_first, u * u * (2.0 - u), u) * (next_v - prev_v) + slope_part
     drifting = np.zeros(values.shape[-1], dtype=bool)
     drifting[[0, 1, HEADING]] = True
     never = ~mask.any(axis=-2, keepdims=True) & drifting

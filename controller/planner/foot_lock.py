@@ -25,7 +25,7 @@ BoolArray = NDArray[np.bool_]
 
 FADE_FRAMES = 3
 DAMPING = 0.02  # m: damped least squares keeps corrections small near a straight knee
-ITERATIONS = 2
+ITERATIONS = 1
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import onnxruntime as ort
 from controller.planner import encoding as enc
 from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
-from controller.planner.request import Plan, PlanRequest
+from controller.planner.request import Plan, PlanRequest, PlanRequestError
 from hw.errors import AssetError
 
 DEFAULT_MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "planner"
@@ -29,15 +29,18 @@ SPEC_VERSION = 1
 class Planner:
     """Generative in-betweening planner loaded from a model folder (`planner.json` + `planner.onnx`)."""
 
-    def __init__(self, session: ort.InferenceSession, spec: dict[str, Any], foot_lock: bool = True) -> None:
+    def __init__(self, session: ort.InferenceSession, spec: dict[str, Any], foot_lock: bool = True, temperature: float | None = None):
         self._session = session
         self.spec = spec
         self.latent = int(spec["latent"])
-        self.temperature = float(spec["temperature"])  # noise scale: below 1 trades diversity for likelihood
+        # The noise scale: below 1 trades diversity for likelihood; the spec holds the one chosen on validation data.
+        self.temperature = float(spec["temperature"] if temperature is None else temperature)
+        if not 0.0 <= self.temperature <= 2.0:
+            raise PlanRequestError(f"sampling temperature {self.temperature} is out of range: use 0 (the mode) to 2")
         self.legs = LegChains.from_spec(spec["legs"]) if foot_lock else None
 
     @classmethod
-    def load(cls, model_dir: Path | None = None, threads: int = 1, foot_lock: bool = True) -> Planner:
+    def load(cls, model_dir: Path | None = None, threads: int = 1, foot_lock: bool = True, temperature: float | None = None) -> Planner:
         folder = Path(model_dir) if model_dir is not None else DEFAULT_MODEL_DIR
         spec_path = folder / "planner.json"
         try:
@@ -63,7 +66,7 @@ class Planner:
             session = ort.InferenceSession(str(folder / spec["onnx"]), options, providers=["CPUExecutionProvider"])
         except Exception as exc:  # onnxruntime raises its own untyped errors
             raise AssetError(f"cannot load planner ONNX {folder / spec['onnx']}: {exc}") from exc
-        return cls(session, spec, foot_lock)
+        return cls(session, spec, foot_lock, temperature)
 
     def plan(self, request: PlanRequest) -> Plan:
         """One plan; raises PlanRequestError for an invalid request."""
@@ -75,9 +78,8 @@ class Planner:
     def sample(self, request: PlanRequest, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]:
         """Plans for one validated request under several seeds in one batch: qpos [S, N, 36], contacts [S, N, 2]."""
         length = request.plan_length()
-        origin_xy, origin_yaw = ft.frame_origin(request.context[-1])
-        context = ft.to_channels(request.context, origin_xy, origin_yaw)
-        values, mask = enc.request_constraints(request, origin_xy, origin_yaw)
+        origin, context, values, mask = enc.request_channels(request)
+        origin_xy, origin_yaw = origin[:2], origin[2]
         curve, window = ft.anchor_curve(context, values, mask)
         cond = enc.conditioning(context, curve, mask, np.array(length), request.text_embedding)
         noise = self.temperature * np.stack([np.random.default_rng(s).standard_normal(self.latent) for s in seeds])
