@@ -144,6 +144,7 @@ class LatentCodec:
 def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = TrainConfig(), progress: bool = True) -> dict[str, object]:
     """Train (or resume) into `out_dir`; write the ONNX planner and its spec. Returns a summary."""
     torch.set_num_threads(cfg.threads)
+    torch.manual_seed(cfg.seed)  # weights, flow noise and times: a run is repeatable on one machine
     out_dir.mkdir(parents=True, exist_ok=True)
     train = _sampler(data_dirs, "train")
     val = _sampler(data_dirs, "val")
@@ -169,6 +170,7 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
         optimizer.load_state_dict(state["optimizer"])
         schedule.load_state_dict(state["schedule"])
         rng.bit_generator.state = state["rng"]
+        torch.set_rng_state(state["torch_rng"])
         step, elapsed_before, history = state["step"], state["elapsed_s"], state["history"]
     bar = tqdm(total=cfg.steps, initial=step, desc="train planner", disable=not progress, unit="step")
     running = 0.0
@@ -277,19 +279,18 @@ def _learning_rate_factor(step: int, total: int) -> float:
     return min(1.0, (step + 1) / warmup) * 0.5 * (1.0 + math.cos(math.pi * min(step / total, 1.0)))
 
 
-def _flow_loss(net: FlowNet, x1: torch.Tensor, cond: torch.Tensor) -> torch.Tensor:
-    x0 = torch.randn_like(x1)
-    t = torch.rand(x1.shape[0])
+def _flow_loss(net: FlowNet, x1: torch.Tensor, cond: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+    x0 = torch.randn(x1.shape, generator=generator)
+    t = torch.rand(x1.shape[0], generator=generator)
     xt = (1 - t[:, None]) * x0 + t[:, None] * x1
     return torch.mean((net.velocity(xt, t, net.encode(cond)) - (x1 - x0)) ** 2)
 
 
 def _validation_loss(net: FlowNet, val: WindowSampler, codec: LatentCodec) -> float:
     batch = val.sample(np.random.default_rng(1234), 1024)
-    torch.manual_seed(1234)
-    with torch.no_grad():
+    with torch.no_grad():  # its own noise stream: the training stream is left where it was
         x1 = torch.as_tensor(codec.encode(batch.target), dtype=torch.float32)
-        return float(_flow_loss(net, x1, torch.as_tensor(batch.cond, dtype=torch.float32)))
+        return float(_flow_loss(net, x1, torch.as_tensor(batch.cond, dtype=torch.float32), torch.Generator().manual_seed(1234)))
 
 
 def _save_checkpoint(path: Path, net, optimizer, schedule, rng, step, elapsed, history, cfg, codec, cond_stats, explained) -> None:
@@ -297,7 +298,7 @@ def _save_checkpoint(path: Path, net, optimizer, schedule, rng, step, elapsed, h
     torch.save(
         {
             "model": net.state_dict(), "optimizer": optimizer.state_dict(), "schedule": schedule.state_dict(),
-            "rng": rng.bit_generator.state, "step": step, "elapsed_s": elapsed, "history": history,
+            "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "step": step, "elapsed_s": elapsed, "history": history,
             "config": asdict(cfg), "codec": codec, "cond_stats": cond_stats, "explained": explained,
         },
         tmp,
