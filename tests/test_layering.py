@@ -26,10 +26,11 @@ def test_hw_imports_neither_controller_nor_sim_nor_mujoco() -> None:
         assert not imported_roots(path) & {"controller", "sim", "mujoco"}, path
 
 
-def test_controller_hardware_path_does_not_import_mujoco() -> None:
+def test_controller_hardware_path_and_planner_runtime_do_not_import_mujoco() -> None:
     code = (
         "import sys; import controller.policy, controller.loop, controller.supervisor, controller.cli, "
-        "controller.inputs.gamepad, controller.inputs.keyboard, controller.inputs.scripted, controller.assets; "
+        "controller.inputs.gamepad, controller.inputs.keyboard, controller.inputs.scripted, controller.assets, "
+        "controller.planner.runtime, controller.planner.dataset, controller.planner.baselines, controller.planner.metrics; "
         "print('mujoco' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
