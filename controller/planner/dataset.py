@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.planner import quat
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES, NUM_JOINTS, QPOS_SIZE
 
@@ -316,7 +317,7 @@ def read_csv_clip(path: str | Path, fps: float) -> FloatArray:
     if (norms < 1e-6).any():
         raise ConfigError(f"{p}: a zero root quaternion at data row {int(np.argmax(norms < 1e-6)) + 1}")
     qpos[:, 3:7] /= norms[:, None]
-    qpos[:, 3:7] = continuous_quaternions(qpos[:, 3:7])
+    qpos[:, 3:7] = quat.continuous(qpos[:, 3:7])
     return resample_qpos(qpos, fps, FPS)
 
 
@@ -326,34 +327,6 @@ def _is_float(text: str) -> bool:
     except ValueError:
         return False
     return True
-
-
-def continuous_quaternions(quats: FloatArray) -> FloatArray:
-    """Flip signs so that consecutive quaternions [T, 4] lie in the same hemisphere (same rotations)."""
-    q = np.array(quats, dtype=np.float64)
-    if len(q) < 2:
-        return q
-    flips = np.einsum("ij,ij->i", q[1:], q[:-1]) < 0
-    sign = np.concatenate([[1.0], np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)])
-    return q * sign[:, None]
-
-
-def slerp(q0: FloatArray, q1: FloatArray, t: FloatArray) -> FloatArray:
-    """Spherical interpolation of unit quaternions [N, 4] at fractions t [N], along the shorter arc."""
-    q0 = np.asarray(q0, dtype=np.float64)
-    q1 = np.array(q1, dtype=np.float64)
-    t = np.asarray(t, dtype=np.float64)[:, None]
-    dot = np.einsum("ij,ij->i", q0, q1)
-    q1[dot < 0] *= -1.0
-    dot = np.abs(dot)[:, None]
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
-    sin = np.sin(theta)
-    near = sin < 1e-6
-    safe = np.where(near, 1.0, sin)
-    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe)
-    w1 = np.where(near, t, np.sin(t * theta) / safe)
-    out = w0 * q0 + w1 * q1
-    return np.asarray(out / np.linalg.norm(out, axis=1, keepdims=True), dtype=np.float64)
 
 
 def resample_qpos(qpos: FloatArray, fps_in: float, fps_out: float = FPS) -> FloatArray:
@@ -367,7 +340,7 @@ def resample_qpos(qpos: FloatArray, fps_in: float, fps_out: float = FPS) -> Floa
     i0 = np.minimum(np.floor(src + 1e-9).astype(np.int64), n - 2)
     a = np.clip(src - i0, 0.0, 1.0)
     out = q[i0] * (1.0 - a)[:, None] + q[i0 + 1] * a[:, None]
-    out[:, 3:7] = continuous_quaternions(slerp(q[i0, 3:7], q[i0 + 1, 3:7], a))
+    out[:, 3:7] = quat.continuous(quat.slerp(q[i0, 3:7], q[i0 + 1, 3:7], a))
     return out
 
 

@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from controller.planner import quat
 from controller.planner.dataset import (
     FPS,
     GESTURES,
     MotionClip,
-    continuous_quaternions,
     dataset_summary,
     episode_seed,
     load_dataset,
@@ -205,7 +205,7 @@ def test_csv_resampling_between_frames_uses_slerp(tmp_path: Path) -> None:
 
 def test_quaternion_helpers() -> None:
     q = np.array([[1.0, 0, 0, 0], [-1.0, 0, 0, 0], [-0.9, 0, 0, -0.1]])
-    assert (continuous_quaternions(q)[:, 0] > 0).all()
+    assert (quat.continuous(q)[:, 0] > 0).all()
     frames = standing_qpos(3)
     assert resample_qpos(frames, 30.0).shape == (3, 36)
     assert resample_qpos(standing_qpos(101), 100.0).shape == (31, 36)
