@@ -251,8 +251,9 @@ def test_g1_moves_clips_import(tmp_path: Path) -> None:
 
 
 def test_command_programs_and_captions() -> None:
-    from controller.dataset_record import SEGMENT_SECONDS, command_program, with_gesture
+    from controller.gestures import with_gesture
     from controller.inputs.base import CommandLimits
+    from controller.motion_program import SEGMENT_SECONDS, command_program
 
     segments = command_program(np.random.default_rng(4), 300.0, CommandLimits())
     assert segments[0].kind == "stand" and segments[0].start == 0.0
@@ -270,7 +271,8 @@ def test_command_programs_and_captions() -> None:
 
 
 def test_gesture_blending_and_limits(g1_model: Any) -> None:
-    from controller.dataset_record import BLEND_S, UPPER_JOINTS, GesturePlayer, Segment, gesture_weight
+    from controller.gestures import BLEND_S, UPPER_JOINTS, GesturePlayer
+    from controller.motion_program import Segment, gesture_weight
 
     ids = [g1_model.joint(j).id for j in JOINT_NAMES]
     lo, hi = g1_model.jnt_range[ids, 0], g1_model.jnt_range[ids, 1]
