@@ -81,7 +81,6 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
     sole, context_sole = soles[:-2].reshape(seeds, frames, 2, 3), soles[-2:]
     target = sole.copy()
-    weight = np.zeros((seeds, frames, 2))
     for s in range(seeds):
         for side in (0, 1):
             for start, stop in _runs(contacts[s, :, side]):
@@ -93,7 +92,7 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
                 else:
                     anchor = sole[s, start, side, :2]
                 target[s, start:stop, side, :2] = anchor
-                weight[s, :, side] = np.maximum(weight[s, :, side], _fade(start, stop, frames))
+    weight = _fade(contacts)
     weight[:, fixed] = 0.0
     active = weight > 0  # [S, N, 2]
     if not active.any():
@@ -122,11 +121,14 @@ def _runs(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
     return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
-def _fade(start: int, stop: int, frames: int) -> FloatArray:
-    """1 on [start, stop), falling linearly to 0 over FADE_FRAMES on each side."""
-    t = np.arange(frames)
-    outside = np.maximum(start - t, t - (stop - 1)).clip(min=0)
-    return np.clip(1.0 - outside / (FADE_FRAMES + 1), 0.0, 1.0)
+def _fade(contacts: BoolArray) -> FloatArray:
+    """[S, N, 2]: 1 on contact frames, falling linearly to 0 over FADE_FRAMES frames on each side of a run."""
+    t = np.arange(contacts.shape[1], dtype=np.float64)[:, None]
+    far = float(contacts.shape[1] + FADE_FRAMES + 1)
+    last = np.maximum.accumulate(np.where(contacts, t, -far), axis=1)  # the latest contact frame at or before t
+    following = np.minimum.accumulate(np.where(contacts, t, 2 * far)[:, ::-1], axis=1)[:, ::-1]  # the next one at or after t
+    distance = np.minimum(t - last, following - t)
+    return np.clip(1.0 - distance / (FADE_FRAMES + 1), 0.0, 1.0)
 
 
 def _matrices(q: FloatArray) -> FloatArray:
