@@ -2,14 +2,18 @@
 
 Under the default time-sharing scheduler a 2 ms cycle is late whenever another task
 holds the core; SCHED_FIFO lets the control threads preempt ordinary work, the way
-ros2_control's `thread_priority` and Unitree's deploy scripts run. Call it before any
-bus thread starts: threads inherit the policy. It needs CAP_SYS_NICE (root, or an
-`rtprio` line in /etc/security/limits.conf); without it the run goes on at normal
-priority and the returned report says why.
+ros2_control's `thread_priority` and Unitree's deploy scripts run. Memory is locked
+(mlockall) so that no page fault stalls a cycle: on the development machine that removed
+the bursts of 2-3 ms cycles that SCHED_FIFO alone left. Call it before any bus thread
+starts: threads inherit the policy. It needs CAP_SYS_NICE and CAP_IPC_LOCK (root, or
+`rtprio` and `memlock` lines in /etc/security/limits.conf); without them the run goes on
+and the returned report says what was not granted.
 """
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import logging
 import os
 from dataclasses import dataclass
@@ -19,6 +23,7 @@ from hw.errors import ConfigError
 log = logging.getLogger(__name__)
 
 MAX_PRIORITY = 99
+MCL_CURRENT, MCL_FUTURE = 1, 2  # <sys/mman.h> on Linux
 
 
 @dataclass(frozen=True)
@@ -46,7 +51,19 @@ def request_realtime(priority: int) -> Scheduling:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     except PermissionError:
         return _normal("SCHED_FIFO not permitted: run as root or grant rtprio in /etc/security/limits.conf")
+    if not _lock_memory():
+        log.warning("memory not locked (mlockall refused): grant memlock in /etc/security/limits.conf; page faults may stall cycles")
+        return Scheduling("SCHED_FIFO", priority, "memory not locked")
     return Scheduling("SCHED_FIFO", priority)
+
+
+def _lock_memory() -> bool:
+    """mlockall(MCL_CURRENT | MCL_FUTURE); False where refused or unavailable."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        return bool(libc.mlockall(MCL_CURRENT | MCL_FUTURE) == 0)
+    except (OSError, AttributeError):
+        return False
 
 
 def _normal(why: str) -> Scheduling:
