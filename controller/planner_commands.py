@@ -64,7 +64,6 @@ def run_train(args: argparse.Namespace) -> int:
 @dataclass(frozen=True)
 class _Scene:
     context: np.ndarray
-    target: np.ndarray | None  # the target keyframe (full pose), when planning towards data
     truth: np.ndarray | None
     request_keyframes: tuple[Keyframe, ...]
 
@@ -107,7 +106,7 @@ def _scene_from_target(args: argparse.Namespace) -> _Scene:
     stand = np.zeros(g1.QPOS_SIZE)
     stand[2], stand[3] = g1.STANDING_PELVIS_HEIGHT, 1.0
     stand[7:] = [g1.DEFAULT_JOINT_POS.get(j, 0.0) for j in g1.JOINT_NAMES]
-    return _Scene(np.tile(stand, (4, 1)), None, None, (target_root(args.length - 1, x, y, heading),))
+    return _Scene(np.tile(stand, (4, 1)), None, (target_root(args.length - 1, x, y, heading),))
 
 
 def _scene_from_data(args: argparse.Namespace) -> _Scene:
@@ -121,7 +120,7 @@ def _scene_from_data(args: argparse.Namespace) -> _Scene:
     start = int(rng.integers(0, len(clip.qpos) - 4 - args.length + 1))
     window = clip.qpos[start : start + 4 + args.length]
     target = window[-1]
-    return _Scene(window[:4], target, window[4:], (Keyframe(args.length - 1, target),))
+    return _Scene(window[:4], window[4:], (Keyframe(args.length - 1, target),))
 
 
 def _columns(length: int, count: int = 6) -> list[int]:
