@@ -77,20 +77,19 @@ class MitMotor:
 class FeedbackStore:
     """Newest motor-side feedback of every motor of a robot, in robot joint order.
 
-    Drivers write into it; CAN replies are filed raw (`raw_mit`) and decoded for all buses
-    in one batch by the robot, which keeps a 500 Hz cycle to a few vector operations."""
+    Drivers write into it; CAN replies go through a `MitReplyBank` first and are decoded
+    for all buses in one batch, which keeps a 500 Hz cycle to a few vector operations."""
 
     def __init__(self, n: int) -> None:
         self.position = np.zeros(n)
         self.velocity = np.zeros(n)
         self.torque = np.zeros(n)
         self.temperature = np.full(n, np.nan)
-        self.error_code = np.zeros(n, dtype=np.int64)
+        self.error_code = np.full(n, -1, dtype=np.int64)  # -1 until a reply: its first code is always named
         self.faulted = np.zeros(n, dtype=bool)
         self.stamp = np.full(n, np.nan)
         self.missed = np.zeros(n, dtype=np.int64)
-        self.error = ["ok"] * n
-        self.raw_mit: dict[int, bytes] = {}  # joint index -> newest undecoded MIT reply
+        self.error = ["no reply"] * n
 
     def feedback(self, j: int) -> MotorFeedback:
         temp, stamp = float(self.temperature[j]), float(self.stamp[j])
@@ -127,7 +126,8 @@ class BusDriver:
 
 
 class MitBusDriver(BusDriver):
-    """MIT-mode motors on one CAN bus. Commands go to arbitration id = motor id."""
+    """MIT-mode motors on one CAN bus. Commands go to arbitration id = motor id; replies are
+    copied raw into the robot's `MitReplyBank`, rows `first_row` onwards in motor order."""
 
     def __init__(
         self,
@@ -136,31 +136,44 @@ class MitBusDriver(BusDriver):
         motors: list[MitMotor],
         joint_index: list[int],
         store: FeedbackStore,
+        bank: MitReplyBank,
+        first_row: int,
         stamp_clock: Callable[[], float] = time.monotonic,
     ) -> None:
         super().__init__(name, [m.motor_id for m in motors], joint_index, store, stamp_clock)
         self.bus = bus
         self.motors = motors
-        self._expected_len = {j: 6 if m.reply == "basic" else 8 for j, m in zip(joint_index, motors, strict=True)}
+        self.bank = bank
+        self._first_row = first_row  # where this bus's frames start in a batch of command frames
+        # motor id -> (bank row, robot joint index, reply length)
+        self._by_id = {
+            m.motor_id: (first_row + k, j, 6 if m.reply == "basic" else 8) for k, (m, j) in enumerate(zip(motors, joint_index, strict=True))
+        }
         # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
         self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
         self._messages = [can.Message(arbitration_id=i, data=bytearray(8), is_extended_id=False) for i in self.motor_ids]
+        self._loaded: bytes | None = None  # the batch whose frames the messages hold
         self._awaiting: set[int] = set()
         self._joints = [int(j) for j in joint_index]
 
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
+        self._loaded = None
         for motor_id in motor_ids or self.motor_ids:
             k = self.motor_ids.index(motor_id)
             self._messages[k].data = bytearray(frame)
             self._send(k)
 
-    def send_frames(self, frames: bytes) -> None:
-        """Send one encoded 8-byte command per motor, `frames` concatenated in this driver's motor order."""
+    def send_frames(self, batch: bytes) -> None:
+        """Send this bus's 8-byte command frames out of `batch` (every MIT motor's frame, robot
+        MIT order). An unchanged batch (the same object) is sent again without copying."""
         send, sent = self.bus.send, 0
+        if batch is not self._loaded:
+            for k, msg in enumerate(self._messages, start=self._first_row):
+                msg.data = bytearray(batch[8 * k : 8 * k + 8])
+            self._loaded = batch
         try:
-            for k, msg in enumerate(self._messages):
-                msg.data = bytearray(frames[8 * k : 8 * k + 8])
+            for msg in self._messages:
                 send(msg)
                 sent += 1
         except can.CanError as exc:
@@ -187,9 +200,9 @@ class MitBusDriver(BusDriver):
             if msg is None:
                 break
             self._take(msg)
-        while (msg := self.bus.recv(timeout=0.0)) is not None:  # late frames already queued
-            self._take(msg)
-        if awaiting:
+        if awaiting:  # the deadline passed: count what came too late, then the missing replies
+            while (msg := self.bus.recv(timeout=0.0)) is not None:
+                self._take(msg)
             self.counters.dropped += len(awaiting)
             for j in awaiting:
                 self.store.missed[j] += 1
@@ -211,14 +224,15 @@ class MitBusDriver(BusDriver):
             return
         if size == 8 and data[0] == 0xFF and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
             return  # another host's special frame on the bus
-        j = self.slot.get(data[0] & self._id_mask)
-        if j is None:
+        entry = self._by_id.get(data[0] & self._id_mask)
+        if entry is None:
             self.counters.unknown_ids += 1
             return
-        if size != self._expected_len[j]:
+        row, j, expected = entry
+        if size != expected:
             self.counters.bad_frames += 1
             return
-        self.store.raw_mit[j] = bytes(data)
+        self.bank.file(row, data)
         self.counters.frames_received += 1
         self._awaiting.discard(j)
 
@@ -226,34 +240,66 @@ class MitBusDriver(BusDriver):
         self.bus.shutdown()
 
 
-def decode_mit_replies(store: FeedbackStore, ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: np.ndarray, now: float) -> None:
-    """Decode every filed MIT reply at once into the store (`ranges` and `variants` per joint;
-    variants coded 0 basic, 1 cubemars, 2 damiao)."""
-    raw = store.raw_mit
-    if not raw:
-        return
-    n = len(raw)
-    js = np.fromiter(raw.keys(), dtype=np.int64, count=n)
-    data = b"".join(raw.values())
-    if len(data) != 8 * n:  # 6-byte basic replies among them
-        data = b"".join(d.ljust(8, b"\0") for d in raw.values())
-    raw.clear()
-    words = mit.reply_words(data, n)
-    pm, vm, tm = (r[js] for r in ranges)
-    store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values((pm, vm, tm), words)
-    store.stamp[js] = now
-    store.missed[js] = 0
-    kind = variants[js]
-    cube, dm = kind == 1, kind == 2
-    if cube.any():
-        jc, wc = js[cube], words[cube]
-        store.temperature[jc] = ((wc >> 8) & 0xFF).astype(np.uint8).view(np.int8)
-        _set_codes(store, jc, (wc & 0xFF).astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
-    if dm.any():
-        jd, wd = js[dm], words[dm]
-        store.temperature[jd] = wd & 0xFF
-        states = (wd >> 60).astype(np.int64)
-        _set_codes(store, jd, states, mit.DAMIAO_STATES, "unknown state {:#x}", lambda c: c not in mit.DAMIAO_HEALTHY)
+class MitReplyBank:
+    """Newest raw reply of every MIT motor of a robot, one 8-byte row each (robot MIT order).
+
+    Drivers copy replies into their rows as they arrive; `decode` turns every row that ever
+    got a reply into feedback in one array pass. A row keeps its last reply, so decoding it
+    again gives the same values: only stamps and missed counts depend on which rows are new.
+    """
+
+    def __init__(self, joint_index: list[int], ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: list[str]) -> None:
+        m = len(joint_index)
+        self.joints = np.array(joint_index, dtype=np.int64)
+        self.ranges = ranges  # p_max, v_max, t_max per row
+        self.rows = bytearray(8 * m)
+        self.fresh = bytearray(m)  # 1 where a reply came since the last decode
+        self._fresh = np.frombuffer(self.fresh, dtype=np.bool_)
+        self._seen = np.zeros(m, dtype=bool)
+        self._all_seen = m == 0
+        kind = np.array([mit.REPLY_VARIANTS.index(v) for v in variants], dtype=np.int64)
+        self._basic = kind == 0
+        self._cube, self._damiao = np.flatnonzero(kind == 1), np.flatnonzero(kind == 2)
+
+    def file(self, row: int, data: bytes | bytearray) -> None:
+        """A 6- or 8-byte reply into its row (a 6-byte reply leaves bytes 6-7 unused)."""
+        start = 8 * row
+        self.rows[start : start + len(data)] = data
+        self.fresh[row] = 1
+
+    def decode(self, store: FeedbackStore, now: float) -> None:
+        fresh = self._fresh
+        if not fresh.any():
+            return
+        if not self._all_seen:
+            first = fresh & ~self._seen
+            self._seen |= fresh
+            self._all_seen = bool(self._seen.all())
+            for j in self.joints[first & self._basic].tolist():  # no error field: a reply means ok
+                store.error_code[j], store.error[j] = 0, "ok"
+        words = mit.reply_words(self.rows, len(self.fresh))
+        if self._all_seen:  # the steady state: every row, no indexing
+            js, seen_words, ranges = self.joints, words, self.ranges
+        else:
+            seen = self._seen
+            js, seen_words, ranges = self.joints[seen], words[seen], (self.ranges[0][seen], self.ranges[1][seen], self.ranges[2][seen])
+        store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values(ranges, seen_words)
+        new = self.joints if fresh.all() else self.joints[fresh]
+        store.stamp[new] = now
+        store.missed[new] = 0
+        fresh[:] = False
+        cube, damiao = self._cube, self._damiao
+        if not self._all_seen:
+            cube, damiao = cube[self._seen[cube]], damiao[self._seen[damiao]]
+        if len(cube):
+            jc, wc = self.joints[cube], words[cube]
+            store.temperature[jc] = ((wc >> 8) & 0xFF).astype(np.uint8).view(np.int8)
+            _set_codes(store, jc, (wc & 0xFF).astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
+        if len(damiao):
+            jd, wd = self.joints[damiao], words[damiao]
+            store.temperature[jd] = wd & 0xFF
+            states = (wd >> 60).astype(np.int64)
+            _set_codes(store, jd, states, mit.DAMIAO_STATES, "unknown state {:#x}", lambda c: c not in mit.DAMIAO_HEALTHY)
 
 
 def _set_codes(

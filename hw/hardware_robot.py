@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hw import g1
-from hw.drivers import BusCounters, FeedbackStore, MitBusDriver, MitMotor, MotorFeedback, Rs485BusDriver, decode_mit_replies
+from hw.drivers import BusCounters, FeedbackStore, MitBusDriver, MitMotor, MitReplyBank, MotorFeedback, Rs485BusDriver
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
@@ -71,7 +71,6 @@ class HardwareRobot(RobotInterface):
         self.cycles = 0
         self._drivers: dict[str, MitBusDriver | Rs485BusDriver] = {}
         self._closed_counters = BusCounters()  # of buses already closed
-        self._mit_slices: dict[str, tuple[int, int]] = {}  # CAN bus -> its byte range in the batch of MIT frames
         self.store = FeedbackStore(len(joint_names))
         self._slot_of: dict[str, tuple[MitBusDriver | Rs485BusDriver, int]] = {}  # joint -> (driver, motor id)
         self.imu: SerialImu | None = None
@@ -119,35 +118,34 @@ class HardwareRobot(RobotInterface):
         index_of = {name: i for i, name in enumerate(self._names)}
         n = len(self._names)
         self.store = FeedbackStore(n)
-        mit_order: list[int] = []
+        mit_joints = [(name, j) for joints in by_bus.values() for name, j in joints if self.cfg.buses[j.bus].kind == "can"]
+        self._mit_index = np.array([index_of[name] for name, _ in mit_joints], dtype=np.int64)  # robot MIT order: bus by bus
+        ranges = {
+            f: np.array([getattr(models[j.model], f) for _, j in mit_joints], float)
+            for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")
+        }
+        self._mit_ranges = tuple(ranges.values())
+        self._replies = MitReplyBank(
+            self._mit_index.tolist(), (ranges["p_max"], ranges["v_max"], ranges["t_max"]), [j.reply for _, j in mit_joints]
+        )
+        first_row = 0
         for bus_name, joints in by_bus.items():
             bus_cfg = self.cfg.buses[bus_name]
             index = [index_of[name] for name, _ in joints]
             if bus_cfg.kind == "can":
                 motors = [MitMotor(j.id, models[j.model], j.reply) for _, j in joints]
                 bus = open_can(bus_name, bus_cfg)
-                driver: MitBusDriver | Rs485BusDriver = MitBusDriver(bus_name, bus, motors, index, self.store, self.stamp_clock)
-                self._mit_slices[bus_name] = (8 * len(mit_order), 8 * (len(mit_order) + len(index)))
-                mit_order += index
+                driver: MitBusDriver | Rs485BusDriver = MitBusDriver(
+                    bus_name, bus, motors, index, self.store, self._replies, first_row, self.stamp_clock
+                )
+                first_row += len(index)
             else:
                 port = open_serial(bus_name, bus_cfg)
                 driver = Rs485BusDriver(bus_name, port, [j.id for _, j in joints], index, self.store, self.stamp_clock)
             self._drivers[bus_name] = driver
             for name, j in joints:
                 self._slot_of[name] = (driver, j.id)
-        self._mit_index = np.array(mit_order, dtype=np.int64)
         self._has_serial = any(isinstance(d, Rs485BusDriver) for d in self._drivers.values())
-        ranges = {f: np.ones(n) for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")}
-        self._variants = np.zeros(n, dtype=np.int64)  # MIT reply variant per joint: 0 basic, 1 cubemars, 2 damiao
-        for name in self._names:
-            joint = self.cfg.joints[name]
-            if joint.protocol == "mit":
-                i = index_of[name]
-                for f in ranges:
-                    ranges[f][i] = getattr(models[joint.model], f)
-                self._variants[i] = mit.REPLY_VARIANTS.index(joint.reply)
-        self._mit_ranges = tuple(ranges[f][self._mit_index] for f in ranges)
-        self._reply_ranges = (ranges["p_max"], ranges["v_max"], ranges["t_max"])
         self._sign = np.array([self.cfg.joints[n].direction for n in self._names], float)
         self._gear = np.array([self.cfg.joints[n].gear_ratio for n in self._names])
         self._offset = np.array([self.cfg.joints[n].zero_offset for n in self._names])
@@ -319,10 +317,9 @@ class HardwareRobot(RobotInterface):
             mi = self._mit_index
             frames = mit.encode_commands(self._mit_ranges, *(a[mi] for a in motor)).tobytes()  # type: ignore[arg-type]
             self._encoded = (command, frames)
-        for name, driver in self._drivers.items():
+        for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
-                start, end = self._mit_slices[name]
-                driver.send_frames(frames[start:end])
+                driver.send_frames(frames)
             elif motor is not None:
                 idx = driver.joint_index
                 mq, mdq, mkp, mkd, mtau = (a[idx] for a in motor)
@@ -336,7 +333,7 @@ class HardwareRobot(RobotInterface):
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.collect(deadline)
-        decode_mit_replies(self.store, self._reply_ranges, self._variants, self.stamp_clock())
+        self._replies.decode(self.store, self.stamp_clock())
         if self.imu is not None:
             self.imu.poll()
 
@@ -419,4 +416,4 @@ class HardwareRobot(RobotInterface):
             driver.close()
         if self.imu is not None:
             self.imu.close()
-        self._drivers, self._mit_slices, self._slot_of, self.imu = {}, {}, {}, None
+        self._drivers, self._slot_of, self.imu = {}, {}, None
