@@ -241,77 +241,62 @@ class MitBusDriver(BusDriver):
 
 
 class MitReplyBank:
-    """Newest raw reply of every MIT motor of a robot, one 8-byte row each (robot MIT order).
+    """Newest reply of every MIT motor of a robot, one row each (robot MIT order).
 
-    Drivers copy replies into their rows as they arrive; `decode` turns every row that ever
-    got a reply into feedback in one array pass. A row keeps its last reply, so decoding it
-    again gives the same values: only stamps and missed counts depend on which rows are new.
+    Drivers hand replies in as they arrive and each is decoded at once, in plain Python:
+    for a robot's few dozen motors that costs less than a chain of small array operations,
+    whose fixed cost dominates when caches are cold at the start of a control cycle.
+    `publish` then moves the rows into the feedback store in a few array writes.
     """
 
-    def __init__(self, joint_index: list[int], ranges: tuple[np.ndarray, np.ndarray, np.ndarray], variants: list[str]) -> None:
+    def __init__(self, joint_index: list[int], ranges: list[mit.MitRanges], variants: list[str]) -> None:
         m = len(joint_index)
         self.joints = np.array(joint_index, dtype=np.int64)
-        self.ranges = ranges  # p_max, v_max, t_max per row
-        self.rows = bytearray(8 * m)
-        self.fresh = bytearray(m)  # 1 where a reply came since the last decode
-        self._fresh = np.frombuffer(self.fresh, dtype=np.bool_)
-        self._seen = np.zeros(m, dtype=bool)
-        self._all_seen = m == 0
-        kind = np.array([mit.REPLY_VARIANTS.index(v) for v in variants], dtype=np.int64)
-        self._basic = kind == 0
-        self._cube, self._damiao = np.flatnonzero(kind == 1), np.flatnonzero(kind == 2)
+        self._ranges = [(r.p_max, r.v_max, r.t_max) for r in ranges]
+        self._kinds = [mit.REPLY_VARIANTS.index(v) for v in variants]  # 0 basic, 1 cubemars, 2 damiao
+        # Rows that never replied keep the store's initial values.
+        self._position, self._velocity, self._torque = [0.0] * m, [0.0] * m, [0.0] * m
+        self._temperature = [math.nan] * m
+        self._code = [-1] * m
+        self._changed: list[int] = []  # rows whose error code changed since the last publish
+        self._new: set[int] = set()  # rows that replied since the last publish
 
     def file(self, row: int, data: bytes | bytearray) -> None:
-        """A 6- or 8-byte reply into its row (a 6-byte reply leaves bytes 6-7 unused)."""
-        start = 8 * row
-        self.rows[start : start + len(data)] = data
-        self.fresh[row] = 1
-
-    def decode(self, store: FeedbackStore, now: float) -> None:
-        fresh = self._fresh
-        if not fresh.any():
-            return
-        if not self._all_seen:
-            first = fresh & ~self._seen
-            self._seen |= fresh
-            self._all_seen = bool(self._seen.all())
-            for j in self.joints[first & self._basic].tolist():  # no error field: a reply means ok
-                store.error_code[j], store.error[j] = 0, "ok"
-        words = mit.reply_words(self.rows, len(self.fresh))
-        if self._all_seen:  # the steady state: every row, no indexing
-            js, seen_words, ranges = self.joints, words, self.ranges
+        """Decode a 6- or 8-byte reply (length already checked) into its row."""
+        word = int.from_bytes(data, "big") << (64 - 8 * len(data))
+        self._position[row], self._velocity[row], self._torque[row] = mit.reply_values(*self._ranges[row], word)
+        kind = self._kinds[row]
+        if kind == 1:  # CubeMars: int8 temperature in byte 6, error code in byte 7
+            t = (word >> 8) & 0xFF
+            self._temperature[row], code = t - 256 if t > 127 else t, word & 0xFF
+        elif kind == 2:  # Damiao: rotor temperature in byte 7, state in the high nibble of byte 0
+            self._temperature[row], code = word & 0xFF, word >> 60
         else:
-            seen = self._seen
-            js, seen_words, ranges = self.joints[seen], words[seen], (self.ranges[0][seen], self.ranges[1][seen], self.ranges[2][seen])
-        store.position[js], store.velocity[js], store.torque[js] = mit.decode_reply_values(ranges, seen_words)
-        new = self.joints if fresh.all() else self.joints[fresh]
-        store.stamp[new] = now
-        store.missed[new] = 0
-        fresh[:] = False
-        cube, damiao = self._cube, self._damiao
-        if not self._all_seen:
-            cube, damiao = cube[self._seen[cube]], damiao[self._seen[damiao]]
-        if len(cube):
-            jc, wc = self.joints[cube], words[cube]
-            store.temperature[jc] = ((wc >> 8) & 0xFF).astype(np.uint8).view(np.int8)
-            _set_codes(store, jc, (wc & 0xFF).astype(np.int64), mit.CUBEMARS_ERRORS, "unknown error {}", lambda c: c != 0)
-        if len(damiao):
-            jd, wd = self.joints[damiao], words[damiao]
-            store.temperature[jd] = wd & 0xFF
-            states = (wd >> 60).astype(np.int64)
-            _set_codes(store, jd, states, mit.DAMIAO_STATES, "unknown state {:#x}", lambda c: c not in mit.DAMIAO_HEALTHY)
+            code = 0  # no error field: a reply means ok
+        if code != self._code[row]:
+            self._code[row] = code
+            self._changed.append(row)
+        self._new.add(row)
 
-
-def _set_codes(
-    store: FeedbackStore, js: np.ndarray, codes: np.ndarray, names: dict[int, str], unknown: str, bad: Callable[[int], bool]
-) -> None:
-    """Error codes into the store; names are looked up only where a code changed (rarely)."""
-    changed = codes != store.error_code[js]
-    if changed.any():
-        for j, code in zip(js[changed].tolist(), codes[changed].tolist(), strict=True):
+    def publish(self, store: FeedbackStore, now: float) -> None:
+        """The rows into the store; the rows that replied since the last publish are stamped `now`."""
+        new = self._new
+        if not new:
+            return
+        js = self.joints
+        store.position[js], store.velocity[js], store.torque[js] = self._position, self._velocity, self._torque
+        store.temperature[js] = self._temperature
+        stamped = js if len(new) == len(js) else js[sorted(new)]
+        store.stamp[stamped] = now
+        store.missed[stamped] = 0
+        for row in self._changed:  # rarely: look the new code's name up
+            j, kind, code = int(js[row]), self._kinds[row], self._code[row]
             store.error_code[j] = code
-            store.error[j] = names.get(code, unknown.format(code))
-            store.faulted[j] = bad(code)
+            if kind == 2:
+                store.error[j], store.faulted[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}"), code not in mit.DAMIAO_HEALTHY
+            else:
+                store.error[j], store.faulted[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}"), code != 0
+        self._new, self._changed = set(), []
 
 
 class Rs485BusDriver(BusDriver):

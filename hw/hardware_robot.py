@@ -125,9 +125,7 @@ class HardwareRobot(RobotInterface):
             for f in ("p_max", "v_max", "t_max", "kp_max", "kd_max")
         }
         self._mit_ranges = tuple(ranges.values())
-        self._replies = MitReplyBank(
-            self._mit_index.tolist(), (ranges["p_max"], ranges["v_max"], ranges["t_max"]), [j.reply for _, j in mit_joints]
-        )
+        self._replies = MitReplyBank(self._mit_index.tolist(), [models[j.model] for _, j in mit_joints], [j.reply for _, j in mit_joints])
         first_row = 0
         for bus_name, joints in by_bus.items():
             bus_cfg = self.cfg.buses[bus_name]
@@ -148,7 +146,9 @@ class HardwareRobot(RobotInterface):
         self._has_serial = any(isinstance(d, Rs485BusDriver) for d in self._drivers.values())
         self._sign = np.array([self.cfg.joints[n].direction for n in self._names], float)
         self._gear = np.array([self.cfg.joints[n].gear_ratio for n in self._names])
+        self._q_scale, self._tau_scale = self._sign / self._gear, self._sign * self._gear  # motor side -> joint side
         self._offset = np.array([self.cfg.joints[n].zero_offset for n in self._names])
+        self._all_replied = False
         if self.cfg.imu is not None:
             bus_cfg = self.cfg.buses[self.cfg.imu.bus]
             self.imu = SerialImu(self.cfg.imu.bus, open_serial(self.cfg.imu.bus, bus_cfg), self.stamp_clock)
@@ -333,39 +333,37 @@ class HardwareRobot(RobotInterface):
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.collect(deadline)
-        self._replies.decode(self.store, self.stamp_clock())
+        self._replies.publish(self.store, self.stamp_clock())
         if self.imu is not None:
             self.imu.poll()
 
     def _update_state(self) -> None:
         st = self.store
+        if self._all_replied or not np.isnan(st.stamp).any():  # stamps never go back to NaN
+            self._all_replied = True
+            np.multiply(st.position, self._q_scale, out=self._q)
+            self._q += self._offset
+            np.multiply(st.velocity, self._q_scale, out=self._dq)
+            np.multiply(st.torque, self._tau_scale, out=self._tau)
+            return
         valid = ~np.isnan(st.stamp)
-        s, g, off = self._sign[valid], self._gear[valid], self._offset[valid]
-        self._q[valid] = s * st.position[valid] / g + off
-        self._dq[valid] = s * st.velocity[valid] / g
-        self._tau[valid] = s * st.torque[valid] * g
+        self._q[valid] = st.position[valid] * self._q_scale[valid] + self._offset[valid]
+        self._dq[valid] = st.velocity[valid] * self._q_scale[valid]
+        self._tau[valid] = st.torque[valid] * self._tau_scale[valid]
 
     def _check_feedback(self) -> list[str]:
         now = self.stamp_clock()
         safety = self.cfg.safety
         st = self.store
-        stamp, missed, faulted, temperature = st.stamp, st.missed, st.faulted, st.temperature
-        # NaN (never replied, no temperature) compares False: `~(age <= limit)` counts it as stale.
-        stale = ~(now - stamp <= safety.reply_timeout)
-        suspect = stale | (missed >= safety.max_missed_replies) | faulted | (temperature > safety.max_temperature)
         faults: list[str] = []
-        if suspect.any():  # spell out only what is wrong: the common case costs one vector test
-            bad = [int(i) for i in np.flatnonzero(suspect)]
-            fbs = [self.feedback(self._names[i]) for i in bad]
-            faults = feedback_faults(
-                tuple(self._names[i] for i in bad),
-                [f.stamp for f in fbs],
-                [f.missed for f in fbs],
-                [(f.faulted, f.error) for f in fbs],
-                [f.temperature for f in fbs],
-                now,
-                safety,
-            )
+        # The common case costs four reductions; NaN (never replied) fails `>=` and is looked at.
+        if (
+            not st.stamp.min() >= now - safety.reply_timeout
+            or st.missed.max() >= safety.max_missed_replies
+            or st.faulted.any()
+            or (st.temperature > safety.max_temperature).any()
+        ):
+            faults = self._feedback_faults(now)
         faults += [d.bus_fault for d in self._drivers.values() if d.bus_fault]
         if self.imu is not None and self.cfg.imu is not None:
             if self.imu.port_fault:
@@ -374,6 +372,25 @@ class HardwareRobot(RobotInterface):
                 age = self.imu.age(now)
                 faults.append(f"IMU stale ({'no frame yet' if math.isinf(age) else f'last frame {1e3 * age:.0f} ms ago'})")
         return faults
+
+    def _feedback_faults(self, now: float) -> list[str]:
+        """Spell out which joints are wrong and why."""
+        safety = self.cfg.safety
+        st = self.store
+        # NaN (never replied, no temperature) compares False: `~(age <= limit)` counts it as stale.
+        stale = ~(now - st.stamp <= safety.reply_timeout)
+        suspect = stale | (st.missed >= safety.max_missed_replies) | st.faulted | (st.temperature > safety.max_temperature)
+        bad = [int(i) for i in np.flatnonzero(suspect)]
+        fbs = [self.feedback(self._names[i]) for i in bad]
+        return feedback_faults(
+            tuple(self._names[i] for i in bad),
+            [f.stamp for f in fbs],
+            [f.missed for f in fbs],
+            [(f.faulted, f.error) for f in fbs],
+            [f.temperature for f in fbs],
+            now,
+            safety,
+        )
 
     def _enter_error(self, faults: list[str]) -> None:
         if self.state is not Lifecycle.ERROR:

@@ -156,15 +156,22 @@ def encode_reply(
     return body + bytes((int(max(0, min(255, mosfet_temperature))), int(max(0, min(255, temperature)))))
 
 
+def reply_values(p_max: float, v_max: float, t_max: float, word: int) -> tuple[float, float, float]:
+    """Position, velocity and torque of a reply read as a big-endian 64-bit word (a 6-byte
+    reply padded with zeros): bytes 1-5 have the same layout in every variant."""
+    return (
+        ((word >> 40) & 0xFFFF) * (2 * p_max) / 65535 - p_max,
+        ((word >> 28) & 0xFFF) * (2 * v_max) / 4095 - v_max,
+        ((word >> 16) & 0xFFF) * (2 * t_max) / 4095 - t_max,
+    )
+
+
 def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:
     """Decode a status reply; a frame of the wrong length raises `ValueError`."""
     expected = 6 if variant == "basic" else 8
     if len(data) != expected:
         raise ValueError(f"MIT {variant} reply must be {expected} bytes, got {len(data)}")
-    pm, vm, tm = r.p_max, r.v_max, r.t_max
-    position = ((data[1] << 8) | data[2]) * (2 * pm) / 65535 - pm
-    velocity = ((data[3] << 4) | (data[4] >> 4)) * (2 * vm) / 4095 - vm
-    torque = (((data[4] & 0xF) << 8) | data[5]) * (2 * tm) / 4095 - tm
+    position, velocity, torque = reply_values(r.p_max, r.v_max, r.t_max, int.from_bytes(data.ljust(8, b"\0"), "big"))
     if variant == "basic":
         return MitReply(data[0], position, velocity, torque)
     if variant == "cubemars":
@@ -203,19 +210,3 @@ def encode_commands(
     out[:, 6] = ((kd_u & 0xF) << 4) | (t >> 8)
     out[:, 7] = t & 0xFF
     return out
-
-
-def reply_words(frames: bytes, count: int) -> np.ndarray:
-    """`count` replies padded to 8 bytes each, as big-endian 64-bit words (byte 0 in the top bits)."""
-    return np.frombuffer(frames, dtype=">u8", count=count).astype(np.uint64)
-
-
-def decode_reply_values(r: tuple[np.ndarray, np.ndarray, np.ndarray], words: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Position, velocity and torque of many replies at once (bytes 1-5 have the same layout in
-    every variant); `words` from `reply_words`, `r` = p_max, v_max, t_max per reply. Same
-    operations in the same order as `decode_reply`, so the values are identical."""
-    pm, vm, tm = r
-    p = ((words >> 40) & 0xFFFF).astype(np.float64)
-    v = ((words >> 28) & 0xFFF).astype(np.float64)
-    t = ((words >> 16) & 0xFFF).astype(np.float64)
-    return p * (2 * pm) / 65535 - pm, v * (2 * vm) / 4095 - vm, t * (2 * tm) / 4095 - tm

@@ -171,7 +171,7 @@ def test_imu_frame_round_trip_and_crc() -> None:
         imu.decode_imu(bytes(broken))
 
 
-def test_batch_mit_encode_and_decode_match_the_scalar_functions() -> None:
+def test_batch_mit_encode_matches_the_scalar_function() -> None:
     import numpy as np
 
     rng = np.random.default_rng(0)
@@ -184,9 +184,3 @@ def test_batch_mit_encode_and_decode_match_the_scalar_functions() -> None:
     for i in range(n):
         scalar = mit.encode_command(models[which[i]], *(float(v[i]) for v in values))
         assert batch[i].tobytes() == scalar
-    replies = np.concatenate([np.zeros((n, 1), np.uint8), batch[:, :5], np.zeros((n, 2), np.uint8)], axis=1)
-    pos, vel, tau = mit.decode_reply_values(ranges[:3], mit.reply_words(replies.tobytes(), n))
-    for i in range(0, n, 97):
-        frame = bytes([7]) + batch[i, :5].tobytes()
-        reply = mit.decode_reply(models[which[i]], "basic", frame)
-        assert (reply.position, reply.velocity, reply.torque) == (pos[i], vel[i], tau[i])

@@ -1,10 +1,9 @@
-"""The batched MIT reply decode agrees with the scalar codec, row by row, for every reply variant."""
+"""The MIT reply bank agrees with the scalar codec, row by row, for every reply variant."""
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from hw.drivers import FeedbackStore, MitReplyBank
@@ -17,8 +16,7 @@ MOTORS = [(4, AK80_9, "basic", 1), (0, AK80_9, "cubemars", 2), (2, DM4310, "dami
 
 
 def _bank() -> tuple[MitReplyBank, FeedbackStore]:
-    ranges = tuple(np.array([getattr(r, f) for _, r, _, _ in MOTORS]) for f in ("p_max", "v_max", "t_max"))
-    bank = MitReplyBank([j for j, _, _, _ in MOTORS], ranges, [v for _, _, v, _ in MOTORS])  # type: ignore[arg-type]
+    bank = MitReplyBank([j for j, _, _, _ in MOTORS], [r for _, r, _, _ in MOTORS], [v for _, _, v, _ in MOTORS])
     return bank, FeedbackStore(5)
 
 
@@ -31,7 +29,7 @@ def test_rows_decode_like_the_scalar_codec_and_unanswered_rows_stay_empty() -> N
     bank, store = _bank()
     for row in (0, 1, 2):  # row 3 never answers
         bank.file(row, _reply(row, 0.3 * row - 0.2, code=1 if row == 2 else 0))
-    bank.decode(store, now=7.0)
+    bank.publish(store, now=7.0)
     for row in (0, 1, 2):
         j, r, variant, _ = MOTORS[row]
         expected = mit.decode_reply(r, variant, _reply(row, 0.3 * row - 0.2, code=1 if row == 2 else 0))  # type: ignore[arg-type]
@@ -47,11 +45,11 @@ def test_only_new_replies_are_stamped_and_codes_change_names() -> None:
     bank, store = _bank()
     for row in range(4):
         bank.file(row, _reply(row, 0.1))
-    bank.decode(store, now=1.0)
-    bank.decode(store, now=2.0)  # nothing new: nothing changes
+    bank.publish(store, now=1.0)
+    bank.publish(store, now=2.0)  # nothing new: nothing changes
     assert [store.feedback(j).stamp for j, _, _, _ in MOTORS] == [1.0] * 4
     bank.file(1, _reply(1, -0.4, code=2, temperature=-5))
-    bank.decode(store, now=3.0)
+    bank.publish(store, now=3.0)
     assert [store.feedback(j).stamp for j, _, _, _ in MOTORS] == [1.0, 3.0, 1.0, 1.0]
     fb = store.feedback(MOTORS[1][0])
     assert fb.error == "over-current" and fb.faulted and fb.temperature == -5
@@ -62,7 +60,7 @@ def test_only_new_replies_are_stamped_and_codes_change_names() -> None:
 def test_damiao_states_are_named(state: int, faulted: bool) -> None:
     bank, store = _bank()
     bank.file(2, _reply(2, 0.0, code=state))
-    bank.decode(store, now=1.0)
+    bank.publish(store, now=1.0)
     fb = store.feedback(MOTORS[2][0])
     assert fb.faulted is faulted
     assert fb.error == mit.DAMIAO_STATES.get(state, f"unknown state {state:#x}")
