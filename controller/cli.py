@@ -66,10 +66,9 @@ def _build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
     loop.add_argument("--duration", type=float, default=20.0)
 
-    hw_bench = bench_sub.add_parser("hw", help="host bus cycle at 500 Hz against a raw python-can round trip")
+    hw_bench = bench_sub.add_parser("hw", help="host bus cycle at 500 Hz against a raw python-can round trip, both in every period")
     hw_bench.add_argument("--report", type=Path, default=None)
     hw_bench.add_argument("--seconds", type=float, default=60.0)
-    hw_bench.add_argument("--raw-seconds", type=float, default=10.0)
     hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
 
     inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
@@ -138,7 +137,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "bench" and args.bench_command == "hw":
         from controller.bench_hw import run_hw_bench  # noqa: PLC0415
 
-        _emit(run_hw_bench(args.seconds, args.raw_seconds, args.rt_priority), args.report)
+        _emit(run_hw_bench(args.seconds, args.rt_priority), args.report)
         return 0
     if args.command == "bench" and args.bench_command == "inbetween":
         return _bench_inbetween(args)
