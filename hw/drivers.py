@@ -145,9 +145,10 @@ class MitBusDriver(BusDriver):
         self.motors = motors
         self.bank = bank
         self._first_row = first_row  # where this bus's frames start in a batch of command frames
-        # motor id -> (bank row, robot joint index, reply length)
-        self._by_id = {
-            m.motor_id: (first_row + k, j, 6 if m.reply == "basic" else 8) for k, (m, j) in enumerate(zip(motors, joint_index, strict=True))
+        # (first reply byte, reply length) of a healthy reply -> (bank row, robot joint index)
+        self._accept = {
+            (m.motor_id if m.reply != "damiao" else m.motor_id & 0x0F, 6 if m.reply == "basic" else 8): (first_row + k, j)
+            for k, (m, j) in enumerate(zip(motors, joint_index, strict=True))
         }
         # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
         self._id_mask = 0x0F if {m.reply for m in motors} == {"damiao"} else 0xFF
@@ -212,29 +213,31 @@ class MitBusDriver(BusDriver):
         self.collect(time.monotonic() + timeout)
 
     def _take(self, msg: can.Message) -> None:
+        data = msg.data
+        entry = None if msg.is_error_frame or not data else self._accept.get((data[0] & self._id_mask, len(data)))
+        if entry is None:
+            self._reject(msg)
+            return
+        self.bank.pending.append((entry[0], data))
+        self.counters.frames_received += 1
+        self._awaiting.discard(entry[1])
+
+    def _reject(self, msg: can.Message) -> None:
+        """Anything but a healthy reply from one of this bus's motors: say what it was."""
         if msg.is_error_frame:
             self.counters.error_frames += 1
             if msg.arbitration_id & (CAN_ERR_BUSOFF | CAN_ERR_CRTL):
                 self.bus_fault = f"CAN bus '{self.name}' is bus-off or its controller failed (error class {msg.arbitration_id:#x})"
             return  # other classes (a frame that failed its CRC, ...) are counted, not fatal alone
         data = msg.data
-        size = len(data)
-        if size != 8 and size != 6:
-            self.counters.bad_frames += 1
-            return
-        if size == 8 and data[0] == 0xFF and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
+        if len(data) == 8 and data[:7] == b"\xff\xff\xff\xff\xff\xff\xff":
             return  # another host's special frame on the bus
-        entry = self._by_id.get(data[0] & self._id_mask)
-        if entry is None:
-            self.counters.unknown_ids += 1
-            return
-        row, j, expected = entry
-        if size != expected:
+        if len(data) not in (6, 8):
             self.counters.bad_frames += 1
-            return
-        self.bank.file(row, data)
-        self.counters.frames_received += 1
-        self._awaiting.discard(j)
+        elif any((data[0] & self._id_mask, size) in self._accept for size in (6, 8)):
+            self.counters.bad_frames += 1  # a known motor, but the wrong reply length for its model
+        else:
+            self.counters.unknown_ids += 1
 
     def close(self) -> None:
         self.bus.shutdown()
@@ -243,60 +246,64 @@ class MitBusDriver(BusDriver):
 class MitReplyBank:
     """Newest reply of every MIT motor of a robot, one row each (robot MIT order).
 
-    Drivers hand replies in as they arrive and each is decoded at once, in plain Python:
-    for a robot's few dozen motors that costs less than a chain of small array operations,
-    whose fixed cost dominates when caches are cold at the start of a control cycle.
-    `publish` then moves the rows into the feedback store in a few array writes.
+    Drivers append each healthy reply to `pending` as it arrives; `publish` decodes them
+    once per cycle in one plain loop (for a robot's few dozen motors that costs less than a
+    chain of small array operations, whose fixed cost dominates with cold caches) and moves
+    the rows into the feedback store in a few array writes.
     """
 
     def __init__(self, joint_index: list[int], ranges: list[mit.MitRanges], variants: list[str]) -> None:
         m = len(joint_index)
         self.joints = np.array(joint_index, dtype=np.int64)
+        self.pending: list[tuple[int, bytes | bytearray]] = []  # (row, 6- or 8-byte reply), length already checked
         self._ranges = [(r.p_max, r.v_max, r.t_max) for r in ranges]
         self._kinds = [mit.REPLY_VARIANTS.index(v) for v in variants]  # 0 basic, 1 cubemars, 2 damiao
         # Rows that never replied keep the store's initial values.
         self._position, self._velocity, self._torque = [0.0] * m, [0.0] * m, [0.0] * m
         self._temperature = [math.nan] * m
         self._code = [-1] * m
-        self._changed: list[int] = []  # rows whose error code changed since the last publish
-        self._new: set[int] = set()  # rows that replied since the last publish
-
-    def file(self, row: int, data: bytes | bytearray) -> None:
-        """Decode a 6- or 8-byte reply (length already checked) into its row."""
-        word = int.from_bytes(data, "big") << (64 - 8 * len(data))
-        self._position[row], self._velocity[row], self._torque[row] = mit.reply_values(*self._ranges[row], word)
-        kind = self._kinds[row]
-        if kind == 1:  # CubeMars: int8 temperature in byte 6, error code in byte 7
-            t = (word >> 8) & 0xFF
-            self._temperature[row], code = t - 256 if t > 127 else t, word & 0xFF
-        elif kind == 2:  # Damiao: rotor temperature in byte 7, state in the high nibble of byte 0
-            self._temperature[row], code = word & 0xFF, word >> 60
-        else:
-            code = 0  # no error field: a reply means ok
-        if code != self._code[row]:
-            self._code[row] = code
-            self._changed.append(row)
-        self._new.add(row)
 
     def publish(self, store: FeedbackStore, now: float) -> None:
-        """The rows into the store; the rows that replied since the last publish are stamped `now`."""
-        new = self._new
-        if not new:
+        """Decode the pending replies into their rows and the rows into the store; rows that
+        replied are stamped `now`."""
+        pending = self.pending
+        if not pending:
             return
+        ranges, kinds, codes, temperature = self._ranges, self._kinds, self._code, self._temperature
+        position, velocity, torque = self._position, self._velocity, self._torque
+        changed = []
+        for row, data in pending:
+            word = int.from_bytes(data, "big") << (64 - 8 * len(data))
+            pm, vm, tm = ranges[row]
+            position[row], velocity[row], torque[row] = mit.reply_values(pm, vm, tm, word)
+            kind = kinds[row]
+            if kind == 1:  # CubeMars: int8 temperature in byte 6, error code in byte 7
+                t = (word >> 8) & 0xFF
+                temperature[row], code = t - 256 if t > 127 else t, word & 0xFF
+            elif kind == 2:  # Damiao: rotor temperature in byte 7, state in the high nibble of byte 0
+                temperature[row], code = word & 0xFF, word >> 60
+            else:
+                code = 0  # no error field: a reply means ok
+            if code != codes[row]:
+                codes[row] = code
+                changed.append(row)
         js = self.joints
-        store.position[js], store.velocity[js], store.torque[js] = self._position, self._velocity, self._torque
-        store.temperature[js] = self._temperature
-        stamped = js if len(new) == len(js) else js[sorted(new)]
+        store.position[js], store.velocity[js], store.torque[js], store.temperature[js] = position, velocity, torque, temperature
+        rows = {row for row, _ in pending}  # a row can reply twice: a late reply, then the new one
+        stamped = js if len(rows) == len(js) else js[sorted(rows)]
         store.stamp[stamped] = now
         store.missed[stamped] = 0
-        for row in self._changed:  # rarely: look the new code's name up
-            j, kind, code = int(js[row]), self._kinds[row], self._code[row]
-            store.error_code[j] = code
-            if kind == 2:
-                store.error[j], store.faulted[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}"), code not in mit.DAMIAO_HEALTHY
-            else:
-                store.error[j], store.faulted[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}"), code != 0
-        self._new, self._changed = set(), []
+        pending.clear()
+        for row in changed:  # rarely: look the new code's name up
+            self._name_code(store, int(js[row]), kinds[row], codes[row])
+
+    @staticmethod
+    def _name_code(store: FeedbackStore, j: int, kind: int, code: int) -> None:
+        store.error_code[j] = code
+        if kind == 2:
+            store.error[j], store.faulted[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}"), code not in mit.DAMIAO_HEALTHY
+        else:
+            store.error[j], store.faulted[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}"), code != 0
 
 
 class Rs485BusDriver(BusDriver):

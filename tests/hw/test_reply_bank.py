@@ -28,7 +28,7 @@ def _reply(row: int, position: float, code: int = 0, temperature: float = 40.0) 
 def test_rows_decode_like_the_scalar_codec_and_unanswered_rows_stay_empty() -> None:
     bank, store = _bank()
     for row in (0, 1, 2):  # row 3 never answers
-        bank.file(row, _reply(row, 0.3 * row - 0.2, code=1 if row == 2 else 0))
+        bank.pending.append((row, _reply(row, 0.3 * row - 0.2, code=1 if row == 2 else 0)))
     bank.publish(store, now=7.0)
     for row in (0, 1, 2):
         j, r, variant, _ = MOTORS[row]
@@ -44,11 +44,11 @@ def test_rows_decode_like_the_scalar_codec_and_unanswered_rows_stay_empty() -> N
 def test_only_new_replies_are_stamped_and_codes_change_names() -> None:
     bank, store = _bank()
     for row in range(4):
-        bank.file(row, _reply(row, 0.1))
+        bank.pending.append((row, _reply(row, 0.1)))
     bank.publish(store, now=1.0)
     bank.publish(store, now=2.0)  # nothing new: nothing changes
     assert [store.feedback(j).stamp for j, _, _, _ in MOTORS] == [1.0] * 4
-    bank.file(1, _reply(1, -0.4, code=2, temperature=-5))
+    bank.pending.append((1, _reply(1, -0.4, code=2, temperature=-5)))
     bank.publish(store, now=3.0)
     assert [store.feedback(j).stamp for j, _, _, _ in MOTORS] == [1.0, 3.0, 1.0, 1.0]
     fb = store.feedback(MOTORS[1][0])
@@ -59,8 +59,16 @@ def test_only_new_replies_are_stamped_and_codes_change_names() -> None:
 @pytest.mark.parametrize("state,faulted", [(0x1, False), (0x0, False), (0xD, True), (0x7, True)])
 def test_damiao_states_are_named(state: int, faulted: bool) -> None:
     bank, store = _bank()
-    bank.file(2, _reply(2, 0.0, code=state))
+    bank.pending.append((2, _reply(2, 0.0, code=state)))
     bank.publish(store, now=1.0)
     fb = store.feedback(MOTORS[2][0])
     assert fb.faulted is faulted
     assert fb.error == mit.DAMIAO_STATES.get(state, f"unknown state {state:#x}")
+
+
+def test_a_row_that_replied_twice_does_not_stamp_a_silent_one() -> None:
+    bank, store = _bank()
+    for row in (0, 0, 1, 2):  # a late reply of row 0, then its new one; row 3 silent
+        bank.pending.append((row, _reply(row, 0.1)))
+    bank.publish(store, now=5.0)
+    assert [store.feedback(j).stamp for j, _, _, _ in MOTORS] == [5.0, 5.0, 5.0, None]
