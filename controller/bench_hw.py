@@ -1,16 +1,16 @@
 """`g1ctl bench hw`: the host bus cycle for 29 motors on four simulated CAN buses at 500 Hz.
 
 Measured in one run against the raw python-can round trip of the same frames with a
-trivial echo responder on each bus. Both run in every 2 ms period, in alternating order,
-so they see the same machine: on a shared machine the speed drifts by a third within
-seconds, and slices of one and then the other measured the drift as much as the stack.
+trivial echo responder on each bus: half-second slices of one and then the other, both
+rigs open throughout, so that the machine's drift (a third, within seconds, on a shared
+machine) falls on both alike.
 
 The stack side is the full `HardwareRobot.cycle()` (safety layer, encode, send, collect,
 decode, feedback checks) against the MIT firmware emulators of `sim-can`, whose plant
 holds the joints still (no physics on these cores); the emulators' control step runs
-after both, outside the timed part, as a motor's own controller does. Both run under
-the same scheduling, SCHED_FIFO by default (`--rt-priority`), as a deployed control
-process would; the report says which was granted.
+between cycles, outside the timed part, as a motor's own controller does. Both loops run
+the way a deployed control process would: SCHED_FIFO (`--rt-priority`) with memory
+locked, pinned to one CPU (`--cpu`); the report says what was granted.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import HardwareConfig, load_hardware_config
 from hw.protocols import mit
-from hw.realtime import request_realtime
+from hw.realtime import last_cpu, request_realtime
 from hw.types import JointCommand
 
 RATE_HZ = 500.0
@@ -124,9 +124,10 @@ class StackCycle:
         return elapsed, host.counters().dropped > dropped
 
 
-def run_hw_bench(seconds: float, rt_priority: int = 0) -> dict[str, Any]:
-    """Half-second slices of stack cycles and raw round trips, alternating, each at 500 Hz."""
-    scheduling = request_realtime(rt_priority)
+def run_hw_bench(seconds: float, rt_priority: int = 0, cpu: int | None = None) -> dict[str, Any]:
+    """Half-second slices of stack cycles and raw round trips, alternating, each at 500 Hz.
+    `cpu`: pin the process to it (None: the last CPU; -1: no pinning)."""
+    scheduling = request_realtime(rt_priority, last_cpu() if cpu is None else None if cpu < 0 else cpu)
     cfg = _can_only(load_hardware_config("sim-can"))
     stack_times: list[float] = []
     raw_times: list[float] = []

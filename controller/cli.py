@@ -70,6 +70,7 @@ def _build_parser() -> argparse.ArgumentParser:
     hw_bench.add_argument("--report", type=Path, default=None)
     hw_bench.add_argument("--seconds", type=float, default=60.0)
     hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
+    hw_bench.add_argument("--cpu", type=int, default=None, help="pin both loops to this CPU (default: the last one; -1: no pinning)")
 
     inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
     inbetween.add_argument("--data", type=Path, default=None, help="recorded motion dataset (its test split is used)")
@@ -137,7 +138,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "bench" and args.bench_command == "hw":
         from controller.bench_hw import run_hw_bench  # noqa: PLC0415
 
-        _emit(run_hw_bench(args.seconds, args.rt_priority), args.report)
+        _emit(run_hw_bench(args.seconds, args.rt_priority, args.cpu), args.report)
         return 0
     if args.command == "bench" and args.bench_command == "inbetween":
         return _bench_inbetween(args)

@@ -33,6 +33,7 @@ def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         p = hw_sub.add_parser(name, help=help_text)
         p.add_argument("--hardware", required=True, help="hardware config name (configs/hardware) or path")
         p.add_argument("--rt-priority", type=int, default=0, help="run the bus cycle under SCHED_FIFO at this priority (1-99)")
+        p.add_argument("--cpu", type=int, default=None, help="pin the bus cycle to this CPU (ideally one kept free, e.g. by isolcpus)")
         return p
 
     with_hardware("scan", help_text="list the motors answering on each bus")
@@ -75,7 +76,7 @@ def run_hw(args: argparse.Namespace) -> int:
     from hw.realtime import request_realtime  # noqa: PLC0415
 
     command = args.hw_command
-    request_realtime(args.rt_priority)
+    request_realtime(args.rt_priority, args.cpu)
     if command in ("zero", "sweep") and not args.yes and not _confirm(f"{command} {args.joint} on '{args.hardware}'?"):
         print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
         return 1

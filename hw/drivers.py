@@ -256,7 +256,7 @@ class MitReplyBank:
         m = len(joint_index)
         self.joints = np.array(joint_index, dtype=np.int64)
         self.pending: list[tuple[int, bytes | bytearray]] = []  # (row, 6- or 8-byte reply), length already checked
-        self._ranges = [(r.p_max, r.v_max, r.t_max) for r in ranges]
+        self._scales = [mit.reply_scales(r) for r in ranges]
         self._kinds = [mit.REPLY_VARIANTS.index(v) for v in variants]  # 0 basic, 1 cubemars, 2 damiao
         # Rows that never replied keep the store's initial values.
         self._position, self._velocity, self._torque = [0.0] * m, [0.0] * m, [0.0] * m
@@ -269,13 +269,12 @@ class MitReplyBank:
         pending = self.pending
         if not pending:
             return
-        ranges, kinds, codes, temperature = self._ranges, self._kinds, self._code, self._temperature
+        scales, kinds, codes, temperature = self._scales, self._kinds, self._code, self._temperature
         position, velocity, torque = self._position, self._velocity, self._torque
         changed = []
         for row, data in pending:
             word = int.from_bytes(data, "big") << (64 - 8 * len(data))
-            pm, vm, tm = ranges[row]
-            position[row], velocity[row], torque[row] = mit.reply_values(pm, vm, tm, word)
+            position[row], velocity[row], torque[row] = mit.reply_values(word, scales[row])
             kind = kinds[row]
             if kind == 1:  # CubeMars: int8 temperature in byte 6, error code in byte 7
                 t = (word >> 8) & 0xFF

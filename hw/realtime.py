@@ -7,13 +7,17 @@ ros2_control's `thread_priority` and Unitree's deploy scripts run. Memory is loc
 the bursts of 2-3 ms cycles that SCHED_FIFO alone left. Call it before any bus thread
 starts: threads inherit the policy. It needs CAP_SYS_NICE and CAP_IPC_LOCK (root, or
 `rtprio` and `memlock` lines in /etc/security/limits.conf); without them the run goes on
-and the returned report says what was not granted.
+and the returned report says what was not granted. Pinning to one CPU (`cpu`) is the
+other half of the usual recipe (with that CPU kept free of other work, e.g. `isolcpus`):
+a cycle never migrates, and its threads hand frames to each other without cross-CPU
+wake-ups.
 """
 
 from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import dataclasses
 import logging
 import os
 from dataclasses import dataclass
@@ -33,16 +37,39 @@ class Scheduling:
     policy: str
     priority: int
     note: str = ""
+    cpu: int | None = None
 
     def describe(self) -> str:
         text = f"{self.policy} {self.priority}" if self.policy == "SCHED_FIFO" else self.policy
+        if self.cpu is not None:
+            text += f", pinned to CPU {self.cpu}"
         return f"{text} ({self.note})" if self.note else text
 
 
-def request_realtime(priority: int) -> Scheduling:
-    """Switch this process to SCHED_FIFO at `priority` (1-99); 0 keeps normal scheduling."""
+def request_realtime(priority: int, cpu: int | None = None) -> Scheduling:
+    """Switch this process to SCHED_FIFO at `priority` (1-99; 0 keeps normal scheduling)
+    and, with `cpu`, pin it to that CPU."""
     if not 0 <= priority <= MAX_PRIORITY:
         raise ConfigError(f"real-time priority {priority} is out of range: use 1-{MAX_PRIORITY}, or 0 for normal scheduling")
+    if cpu is not None:
+        pin_to_cpu(cpu)
+    return dataclasses.replace(_set_policy(priority), cpu=cpu)
+
+
+def pin_to_cpu(cpu: int) -> None:
+    """Run this thread, and every thread it starts from now on, on `cpu` only."""
+    allowed = sorted(os.sched_getaffinity(0))
+    if cpu not in allowed:
+        raise ConfigError(f"CPU {cpu} is not available to this process: use one of {', '.join(map(str, allowed))}")
+    os.sched_setaffinity(0, {cpu})
+
+
+def last_cpu() -> int:
+    """The highest-numbered CPU this process may use: CPU 0 usually takes the most interrupts."""
+    return max(os.sched_getaffinity(0))
+
+
+def _set_policy(priority: int) -> Scheduling:
     if priority == 0:
         return Scheduling("SCHED_OTHER", 0)
     if not hasattr(os, "sched_setscheduler"):
