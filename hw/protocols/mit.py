@@ -157,16 +157,20 @@ def encode_reply(
 
 
 def reply_scales(r: MitRanges) -> tuple[float, float, float, float, float, float]:
-    """(scale, max) for position, velocity and torque of a model's replies: value = field * scale - max."""
-    return 2 * r.p_max / 65535, r.p_max, 2 * r.v_max / 4095, r.v_max, 2 * r.t_max / 4095, r.t_max
+    """(span, max) for position, velocity and torque of a model's replies, computed once per motor."""
+    return 2 * r.p_max, r.p_max, 2 * r.v_max, r.v_max, 2 * r.t_max, r.t_max
 
 
 def reply_values(word: int, scales: tuple[float, float, float, float, float, float]) -> tuple[float, float, float]:
     """Position, velocity and torque of a reply read as a big-endian 64-bit word (a 6-byte
     reply padded with zeros): bytes 1-5 have the same layout in every variant. `scales` from
-    `reply_scales`, computed once per motor: this runs for every reply at 500 Hz."""
+    `reply_scales`; the arithmetic is `uint_to_float`'s, written out: it runs for every reply at 500 Hz."""
     sp, pm, sv, vm, st, tm = scales
-    return ((word >> 40) & 0xFFFF) * sp - pm, ((word >> 28) & 0xFFF) * sv - vm, ((word >> 16) & 0xFFF) * st - tm
+    return (
+        ((word >> 40) & 0xFFFF) * sp / 65535 - pm,
+        ((word >> 28) & 0xFFF) * sv / 4095 - vm,
+        ((word >> 16) & 0xFFF) * st / 4095 - tm,
+    )
 
 
 def decode_reply(r: MitRanges, variant: ReplyVariant, data: bytes) -> MitReply:

@@ -184,3 +184,12 @@ def test_batch_mit_encode_matches_the_scalar_function() -> None:
     for i in range(n):
         scalar = mit.encode_command(models[which[i]], *(float(v[i]) for v in values))
         assert batch[i].tobytes() == scalar
+
+
+def test_reply_values_are_uint_to_float_exactly() -> None:
+    frame = mit.encode_reply(AK80_9, "cubemars", 5, 1.2345, -7.5, 3.3)
+    reply = mit.decode_reply(AK80_9, "cubemars", frame)
+    p, v, t = (frame[1] << 8) | frame[2], (frame[3] << 4) | (frame[4] >> 4), ((frame[4] & 0xF) << 8) | frame[5]
+    assert reply.position == mit.uint_to_float(p, -12.5, 12.5, 16)
+    assert reply.velocity == mit.uint_to_float(v, -50.0, 50.0, 12)
+    assert reply.torque == mit.uint_to_float(t, -18.0, 18.0, 12)
