@@ -68,8 +68,13 @@ class JointConfig:
             raise ValueError("a mit joint needs 'model'")
         if self.protocol == "unitree-rs485" and not 0 <= self.id <= 14:
             raise ValueError(f"an RS-485 motor id must be 0-14 (15 is broadcast), got {self.id}")
-        if self.protocol == "mit" and not 1 <= self.id <= 0x7FF:
-            raise ValueError(f"a CAN motor id must be 1-2047, got {self.id}")
+        if self.protocol == "mit":
+            # The reply names its motor in byte 0: the whole byte, or its low nibble for Damiao.
+            top = 15 if self.reply == "damiao" else 255
+            if not 1 <= self.id <= top:
+                raise ValueError(
+                    f"a CAN motor id with {self.reply} replies must be 1-{top} (the reply carries it in byte 0), got {self.id}"
+                )
 
 
 @dataclass(frozen=True)
@@ -138,6 +143,13 @@ def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...],
             raise ConfigError(f"{source}: joints.{name}: protocol {joint.protocol} needs a {wanted} bus, '{joint.bus}' is {bus.kind}")
         if joint.protocol == "mit" and joint.model not in models:
             raise ConfigError(f"{source}: joints.{name}.model: unknown motor model '{joint.model}' (known: {', '.join(models)})")
+        if joint.protocol == "mit":
+            variants = {j.reply for j in cfg.joints.values() if j.bus == joint.bus}
+            if "damiao" in variants and len(variants) > 1:
+                raise ConfigError(
+                    f"{source}: bus '{joint.bus}' mixes damiao replies with {', '.join(sorted(variants - {'damiao'}))}: "
+                    "their first bytes collide (state nibble plus id); give the Damiao motors a bus of their own"
+                )
         key = (joint.bus, joint.id)
         if key in seen:
             raise ConfigError(f"{source}: joints {seen[key]} and {name} share motor id {joint.id} on bus '{joint.bus}'")

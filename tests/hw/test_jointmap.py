@@ -1,0 +1,34 @@
+"""Joint maps that cannot work on the wire are refused at load, naming the file and the key."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from hw.errors import ConfigError
+from hw.jointmap import load_hardware_config
+
+SIM_CAN = Path(__file__).resolve().parents[2] / "configs" / "hardware" / "sim-can.yaml"
+HIP_PITCH = "left_hip_pitch_joint: {bus: can0, protocol: mit, model: sim-leg-150, reply: cubemars, id: 1"
+
+
+def _variant(tmp_path: Path, new: str) -> Path:
+    text = SIM_CAN.read_text()
+    assert HIP_PITCH in text
+    path = tmp_path / "variant.yaml"
+    path.write_text(text.replace(HIP_PITCH, new))
+    return path
+
+
+def test_damiao_replies_cannot_share_a_bus_with_other_variants(tmp_path: Path) -> None:
+    path = _variant(tmp_path, HIP_PITCH.replace("reply: cubemars", "reply: damiao"))
+    with pytest.raises(ConfigError, match="bus 'can0' mixes damiao replies with cubemars: their first bytes collide"):
+        load_hardware_config(str(path))
+
+
+@pytest.mark.parametrize("reply,motor_id,top", [("damiao", 16, 15), ("cubemars", 256, 255)])
+def test_can_ids_must_fit_the_reply_byte(tmp_path: Path, reply: str, motor_id: int, top: int) -> None:
+    path = _variant(tmp_path, HIP_PITCH.replace("reply: cubemars, id: 1", f"reply: {reply}, id: {motor_id}"))
+    with pytest.raises(ConfigError, match=f"must be 1-{top} .*got {motor_id}"):
+        load_hardware_config(str(path))
