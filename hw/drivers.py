@@ -55,7 +55,8 @@ class MotorFeedback:
 class BusCounters:
     frames_sent: int = 0
     frames_received: int = 0
-    dropped: int = 0  # expected replies that did not come
+    dropped: int = 0  # expected replies that did not come before the cycle's deadline
+    late_replies: int = 0  # of those, the ones that came afterwards (their values are used, their stamps are not)
     crc_errors: int = 0
     bad_frames: int = 0  # wrong length or header
     unknown_ids: int = 0
@@ -160,6 +161,7 @@ class MitBusDriver(BusDriver):
     def send_special(self, frame: bytes, motor_ids: tuple[int, ...] | None = None) -> None:
         """Enter/exit motor mode or set zero; each motor answers with a status reply."""
         self._loaded = None
+        self._take_queued()
         for motor_id in motor_ids or self.motor_ids:
             k = self.motor_ids.index(motor_id)
             self._messages[k].data = bytearray(frame)
@@ -168,6 +170,7 @@ class MitBusDriver(BusDriver):
     def send_frames(self, batch: bytes) -> None:
         """Send this bus's 8-byte command frames out of `batch` (every MIT motor's frame, robot
         MIT order). An unchanged batch (the same object) is sent again without copying."""
+        self._take_queued()
         send, sent = self.bus.send, 0
         if batch is not self._loaded:
             for k, msg in enumerate(self._messages, start=self._first_row):
@@ -201,26 +204,44 @@ class MitBusDriver(BusDriver):
             if msg is None:
                 break
             self._take(msg)
-        if awaiting:  # the deadline passed: count what came too late, then the missing replies
-            while (msg := self.bus.recv(timeout=0.0)) is not None:
-                self._take(msg)
+        if awaiting:  # the deadline passed: a reply that comes later is taken before the next send
             self.counters.dropped += len(awaiting)
             for j in awaiting:
                 self.store.missed[j] += 1
             awaiting.clear()
 
+    def _take_queued(self) -> None:
+        """Before a send: take what arrived since the last collect (late replies, error frames).
+        MIT replies carry no sequence number, so a late reply left queued would stand in for
+        the next command's reply, and every cycle after would read the one before it."""
+        while (msg := self.bus.recv(timeout=0.0)) is not None:
+            self._take_late(msg)
+
     def collect_now(self, timeout: float) -> None:
         self.collect(time.monotonic() + timeout)
 
     def _take(self, msg: can.Message) -> None:
+        entry = self._accepted(msg)
+        if entry is not None:
+            self.bank.pending.append((entry[0], msg.data))
+            self.counters.frames_received += 1
+            self._awaiting.discard(entry[1])
+
+    def _take_late(self, msg: can.Message) -> None:
+        """A reply that missed its cycle's deadline: its values are the newest, but it answers no command of this cycle."""
+        entry = self._accepted(msg)
+        if entry is not None:
+            self.bank.late.append((entry[0], msg.data))
+            self.counters.frames_received += 1
+            self.counters.late_replies += 1
+
+    def _accepted(self, msg: can.Message) -> tuple[int, int] | None:
+        """(bank row, joint index) of a healthy reply from one of this bus's motors; anything else is counted."""
         data = msg.data
         entry = None if msg.is_error_frame or not data else self._accept.get((data[0] & self._id_mask, len(data)))
         if entry is None:
             self._reject(msg)
-            return
-        self.bank.pending.append((entry[0], data))
-        self.counters.frames_received += 1
-        self._awaiting.discard(entry[1])
+        return entry
 
     def _reject(self, msg: can.Message) -> None:
         """Anything but a healthy reply from one of this bus's motors: say what it was."""
@@ -246,7 +267,8 @@ class MitBusDriver(BusDriver):
 class MitReplyBank:
     """Newest reply of every MIT motor of a robot, one row each (robot MIT order).
 
-    Drivers append each healthy reply to `pending` as it arrives; `publish` decodes them
+    Drivers append each healthy reply to `pending` as it arrives (to `late` when it missed
+    its cycle's deadline); `publish` decodes them
     once per cycle in one plain loop (for a robot's few dozen motors that costs less than a
     chain of small array operations, whose fixed cost dominates with cold caches) and moves
     the rows into the feedback store in a few array writes.
@@ -256,6 +278,7 @@ class MitReplyBank:
         m = len(joint_index)
         self.joints = np.array(joint_index, dtype=np.int64)
         self.pending: list[tuple[int, bytes | bytearray]] = []  # (row, 6- or 8-byte reply), length already checked
+        self.late: list[tuple[int, bytes | bytearray]] = []  # replies after their deadline: values, but no stamp
         self._scales = [mit.reply_scales(r) for r in ranges]
         self._kinds = [mit.REPLY_VARIANTS.index(v) for v in variants]  # 0 basic, 1 cubemars, 2 damiao
         # Rows that never replied keep the store's initial values.
@@ -266,13 +289,13 @@ class MitReplyBank:
     def publish(self, store: FeedbackStore, now: float) -> None:
         """Decode the pending replies into their rows and the rows into the store; rows that
         replied are stamped `now`."""
-        pending = self.pending
-        if not pending:
+        pending, late = self.pending, self.late
+        if not pending and not late:
             return
         scales, kinds, codes, temperature = self._scales, self._kinds, self._code, self._temperature
         position, velocity, torque = self._position, self._velocity, self._torque
         changed = []
-        for row, data in pending:
+        for row, data in (late + pending) if late else pending:  # in arrival order: the newest wins
             word = int.from_bytes(data, "big") << (64 - 8 * len(data))
             position[row], velocity[row], torque[row] = mit.reply_values(word, scales[row])
             kind = kinds[row]
@@ -288,11 +311,12 @@ class MitReplyBank:
                 changed.append(row)
         js = self.joints
         store.position[js], store.velocity[js], store.torque[js], store.temperature[js] = position, velocity, torque, temperature
-        rows = {row for row, _ in pending}  # a row can reply twice: a late reply, then the new one
+        rows = {row for row, _ in pending}  # a row can reply twice in a cycle (another host's command)
         stamped = js if len(rows) == len(js) else js[sorted(rows)]
         store.stamp[stamped] = now
         store.missed[stamped] = 0
         pending.clear()
+        late.clear()
         for row in changed:  # rarely: look the new code's name up
             self._name_code(store, int(js[row]), kinds[row], codes[row])
 
