@@ -349,6 +349,7 @@ class Rs485BusDriver(BusDriver):
 
     def send_arrays(self, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray, enabled: bool) -> None:
         """Queue the frames; the bus is half-duplex, so each goes out when the previous reply is in."""
+        self._take_queued()
         mode = rs485.MODE_FOC if enabled else rs485.MODE_BRAKE
         rows = zip(self.motor_ids, q.tolist(), dq.tolist(), kp.tolist(), kd.tolist(), tau.tolist(), strict=True)
         self._queue = [(i, rs485.encode_command(i, mode, t, v, p, a, b)) for i, p, v, a, b, t in rows]
@@ -407,7 +408,19 @@ class Rs485BusDriver(BusDriver):
             if remaining <= 0:
                 return False
 
-    def _handle(self, frame: bytes) -> int | None:
+    def _take_queued(self) -> None:
+        """Before a cycle's first frame: what arrived since the last one is late (values, no stamp),
+        so that it cannot pass for the reply to this cycle's command to the same motor."""
+        try:
+            waiting = self.port.in_waiting
+            data = self.port.read(waiting) if waiting else b""
+        except (serial.SerialException, OSError) as exc:
+            self.bus_fault = f"serial port '{self.name}' read failed: {exc}"
+            return
+        for frame in self._splitter.feed(data):
+            self._handle(frame, late=True)
+
+    def _handle(self, frame: bytes, late: bool = False) -> int | None:
         try:
             reply = rs485.decode_reply(frame)
         except rs485.FrameError as exc:
@@ -425,6 +438,9 @@ class Rs485BusDriver(BusDriver):
         st.position[j], st.velocity[j], st.torque[j] = reply.position, reply.speed, reply.torque
         st.temperature[j], st.error_code[j], st.error[j] = reply.temperature, reply.error_code, reply.error
         st.faulted[j] = reply.error_code != 0
+        if late:
+            self.counters.late_replies += 1
+            return None
         st.stamp[j], st.missed[j] = self.stamp_clock(), 0
         return reply.motor_id
 
