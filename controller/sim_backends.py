@@ -98,6 +98,7 @@ class HardwareBackend:
             "frames_sent": c.frames_sent,
             "frames_received": c.frames_received,
             "dropped": c.dropped,
+            "late_replies": c.late_replies,
             "crc_errors": c.crc_errors,
             "bad_frames": c.bad_frames,
             "unknown_ids": c.unknown_ids,
