@@ -1,15 +1,15 @@
 """Motor bus drivers: encode commands, exchange frames on one bus, decode and count replies.
 
 Everything here is on the motor side (rotor units, motor ids); the robot layer converts
-to joints. Commands and feedback are arrays in the driver's motor order, so a 500 Hz
-cycle encodes and decodes a bus in a few vector operations. A driver never raises on a
-bad frame: it counts it, and the safety layer decides. Bus-level failures (an error
-frame, a port that vanished) are reported through `bus_fault`.
+to joints. Commands are encoded for every motor at once, and a batch that did not change
+is sent again as it is; replies land in a shared feedback store. A driver never raises on
+a bad frame: it counts it, and the safety layer decides. A reply that misses its cycle's
+deadline is taken before the next send as late, so it cannot answer the next command.
+Bus-level failures (an error frame, a port that vanished) are reported through `bus_fault`.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,6 +18,7 @@ import can
 import numpy as np
 import serial
 
+from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
 
@@ -34,21 +35,6 @@ class MotorCommand:
     kp: float
     kd: float
     tau: float
-
-
-@dataclass(frozen=True)
-class MotorFeedback:
-    """Newest reply of one motor (motor side); `stamp` is None until the first reply."""
-
-    position: float
-    velocity: float
-    torque: float
-    temperature: float | None
-    error_code: int
-    error: str
-    faulted: bool
-    stamp: float | None
-    missed: int
 
 
 @dataclass
@@ -73,38 +59,6 @@ class MitMotor:
     motor_id: int
     ranges: mit.MitRanges
     reply: mit.ReplyVariant
-
-
-class FeedbackStore:
-    """Newest motor-side feedback of every motor of a robot, in robot joint order.
-
-    Drivers write into it; CAN replies go through a `MitReplyBank` first and are decoded
-    for all buses in one batch, which keeps a 500 Hz cycle to a few vector operations."""
-
-    def __init__(self, n: int) -> None:
-        self.position = np.zeros(n)
-        self.velocity = np.zeros(n)
-        self.torque = np.zeros(n)
-        self.temperature = np.full(n, np.nan)
-        self.error_code = np.full(n, -1, dtype=np.int64)  # -1 until a reply: its first code is always named
-        self.faulted = np.zeros(n, dtype=bool)
-        self.stamp = np.full(n, np.nan)
-        self.missed = np.zeros(n, dtype=np.int64)
-        self.error = ["no reply"] * n
-
-    def feedback(self, j: int) -> MotorFeedback:
-        temp, stamp = float(self.temperature[j]), float(self.stamp[j])
-        return MotorFeedback(
-            float(self.position[j]),
-            float(self.velocity[j]),
-            float(self.torque[j]),
-            None if math.isnan(temp) else temp,
-            int(self.error_code[j]),
-            self.error[j],
-            bool(self.faulted[j]),
-            None if math.isnan(stamp) else stamp,
-            int(self.missed[j]),
-        )
 
 
 class BusDriver:
@@ -262,71 +216,6 @@ class MitBusDriver(BusDriver):
 
     def close(self) -> None:
         self.bus.shutdown()
-
-
-class MitReplyBank:
-    """Newest reply of every MIT motor of a robot, one row each (robot MIT order).
-
-    Drivers append each healthy reply to `pending` as it arrives (to `late` when it missed
-    its cycle's deadline); `publish` decodes them
-    once per cycle in one plain loop (for a robot's few dozen motors that costs less than a
-    chain of small array operations, whose fixed cost dominates with cold caches) and moves
-    the rows into the feedback store in a few array writes.
-    """
-
-    def __init__(self, joint_index: list[int], ranges: list[mit.MitRanges], variants: list[str]) -> None:
-        m = len(joint_index)
-        self.joints = np.array(joint_index, dtype=np.int64)
-        self.pending: list[tuple[int, bytes | bytearray]] = []  # (row, 6- or 8-byte reply), length already checked
-        self.late: list[tuple[int, bytes | bytearray]] = []  # replies after their deadline: values, but no stamp
-        self._scales = [mit.reply_scales(r) for r in ranges]
-        self._kinds = [mit.REPLY_VARIANTS.index(v) for v in variants]  # 0 basic, 1 cubemars, 2 damiao
-        # Rows that never replied keep the store's initial values.
-        self._position, self._velocity, self._torque = [0.0] * m, [0.0] * m, [0.0] * m
-        self._temperature = [math.nan] * m
-        self._code = [-1] * m
-
-    def publish(self, store: FeedbackStore, now: float) -> None:
-        """Decode the pending replies into their rows and the rows into the store; rows that
-        replied are stamped `now`."""
-        pending, late = self.pending, self.late
-        if not pending and not late:
-            return
-        scales, kinds, codes, temperature = self._scales, self._kinds, self._code, self._temperature
-        position, velocity, torque = self._position, self._velocity, self._torque
-        changed = []
-        for row, data in (late + pending) if late else pending:  # in arrival order: the newest wins
-            word = int.from_bytes(data, "big") << (64 - 8 * len(data))
-            position[row], velocity[row], torque[row] = mit.reply_values(word, scales[row])
-            kind = kinds[row]
-            if kind == 1:  # CubeMars: int8 temperature in byte 6, error code in byte 7
-                t = (word >> 8) & 0xFF
-                temperature[row], code = t - 256 if t > 127 else t, word & 0xFF
-            elif kind == 2:  # Damiao: rotor temperature in byte 7, state in the high nibble of byte 0
-                temperature[row], code = word & 0xFF, word >> 60
-            else:
-                code = 0  # no error field: a reply means ok
-            if code != codes[row]:
-                codes[row] = code
-                changed.append(row)
-        js = self.joints
-        store.position[js], store.velocity[js], store.torque[js], store.temperature[js] = position, velocity, torque, temperature
-        rows = {row for row, _ in pending}  # a row can reply twice in a cycle (another host's command)
-        stamped = js if len(rows) == len(js) else js[sorted(rows)]
-        store.stamp[stamped] = now
-        store.missed[stamped] = 0
-        pending.clear()
-        late.clear()
-        for row in changed:  # rarely: look the new code's name up
-            self._name_code(store, int(js[row]), kinds[row], codes[row])
-
-    @staticmethod
-    def _name_code(store: FeedbackStore, j: int, kind: int, code: int) -> None:
-        store.error_code[j] = code
-        if kind == 2:
-            store.error[j], store.faulted[j] = mit.DAMIAO_STATES.get(code, f"unknown state {code:#x}"), code not in mit.DAMIAO_HEALTHY
-        else:
-            store.error[j], store.faulted[j] = mit.CUBEMARS_ERRORS.get(code, f"unknown error {code}"), code != 0
 
 
 class Rs485BusDriver(BusDriver):

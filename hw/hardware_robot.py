@@ -21,8 +21,9 @@ from collections.abc import Callable
 import numpy as np
 
 from hw import g1
-from hw.drivers import BusCounters, FeedbackStore, MitBusDriver, MitMotor, MitReplyBank, MotorFeedback, Rs485BusDriver
+from hw.drivers import BusCounters, MitBusDriver, MitMotor, Rs485BusDriver
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
+from hw.feedback import FeedbackStore, MitReplyBank, MotorFeedback
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
 from hw.protocols import mit

@@ -8,7 +8,8 @@ import uuid
 import can
 import numpy as np
 
-from hw.drivers import FeedbackStore, MitBusDriver, MitMotor, MitReplyBank
+from hw.drivers import MitBusDriver, MitMotor
+from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 
 AK80_9 = mit.MitRanges(p_max=12.5, v_max=50.0, t_max=18.0, kp_max=500.0, kd_max=5.0)

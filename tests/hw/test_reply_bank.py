@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from hw.drivers import FeedbackStore, MitReplyBank
+from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 
 AK80_9 = mit.MitRanges(p_max=12.5, v_max=50.0, t_max=18.0, kp_max=500.0, kd_max=5.0)

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 import serial
 
-from hw.drivers import FeedbackStore, Rs485BusDriver
+from hw.drivers import Rs485BusDriver
+from hw.feedback import FeedbackStore
 from hw.protocols import unitree_rs485 as rs485
 
 
