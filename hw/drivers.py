@@ -21,6 +21,7 @@ import serial
 from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
+from hw.transport import read_waiting
 
 CAN_ERR_CRTL = 0x04  # SocketCAN error classes (linux/can/error.h): controller problems
 CAN_ERR_BUSOFF = 0x40
@@ -82,7 +83,7 @@ class BusDriver:
 
 class MitBusDriver(BusDriver):
     """MIT-mode motors on one CAN bus. Commands go to arbitration id = motor id; replies are
-    copied raw into the robot's `MitReplyBank`, rows `first_row` onwards in motor order."""
+    handed undecoded to the robot's `MitReplyBank`, rows `first_row` onwards in motor order."""
 
     def __init__(
         self,
@@ -102,7 +103,7 @@ class MitBusDriver(BusDriver):
         self._first_row = first_row  # where this bus's frames start in a batch of command frames
         # (first reply byte, reply length) of a healthy reply -> (bank row, robot joint index)
         self._accept = {
-            (m.motor_id if m.reply != "damiao" else m.motor_id & 0x0F, 6 if m.reply == "basic" else 8): (first_row + k, j)
+            (m.motor_id, 6 if m.reply == "basic" else 8): (first_row + k, j)
             for k, (m, j) in enumerate(zip(motors, joint_index, strict=True))
         }
         # Damiao replies carry the id in the low nibble of byte 0, the others in the whole byte.
@@ -301,8 +302,7 @@ class Rs485BusDriver(BusDriver):
         """Before a cycle's first frame: what arrived since the last one is late (values, no stamp),
         so that it cannot pass for the reply to this cycle's command to the same motor."""
         try:
-            waiting = self.port.in_waiting
-            data = self.port.read(waiting) if waiting else b""
+            data = read_waiting(self.port)
         except (serial.SerialException, OSError) as exc:
             self.bus_fault = f"serial port '{self.name}' read failed: {exc}"
             return

@@ -64,10 +64,10 @@ class MitReplyBank:
     """Newest reply of every MIT motor of a robot, one row each (robot MIT order).
 
     Drivers append each healthy reply to `pending` as it arrives (to `late` when it missed
-    its cycle's deadline); `publish` decodes them
-    once per cycle in one plain loop (for a robot's few dozen motors that costs less than a
-    chain of small array operations, whose fixed cost dominates with cold caches) and moves
-    the rows into the feedback store in a few array writes.
+    its cycle's deadline); `publish` decodes them once per cycle in one plain loop (for a
+    robot's few dozen motors that costs less than a chain of small array operations, whose
+    fixed cost dominates with cold caches) and moves the rows into the feedback store in a
+    few array writes.
     """
 
     def __init__(self, joint_index: list[int], ranges: list[mit.MitRanges], variants: list[str]) -> None:

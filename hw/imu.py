@@ -10,6 +10,7 @@ import serial
 
 from hw.protocols import imu as imu_frame
 from hw.protocols.unitree_rs485 import FrameError, FrameSplitter
+from hw.transport import read_waiting
 
 
 @dataclass
@@ -34,8 +35,7 @@ class SerialImu:
     def poll(self) -> None:
         """Consume whatever bytes have arrived; never blocks."""
         try:
-            waiting = self.port.in_waiting
-            data = self.port.read(waiting) if waiting else b""
+            data = read_waiting(self.port)
         except (serial.SerialException, OSError) as exc:
             self.port_fault = f"IMU port '{self.name}' read failed: {exc}"
             return

@@ -42,3 +42,9 @@ def open_serial(name: str, cfg: BusConfig) -> serial.SerialBase:
                 f"serial port '{name}' ({cfg.port}) refuses RS-485 mode: {exc}; set rs485: false if the adapter switches direction itself"
             ) from exc
     return port
+
+
+def read_waiting(port: serial.SerialBase) -> bytes:
+    """The bytes that have already arrived on `port` (b"" when none have); never waits."""
+    waiting = port.in_waiting
+    return bytes(port.read(waiting)) if waiting else b""
