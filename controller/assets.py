@@ -22,10 +22,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from hw.errors import AssetError
+from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_yaml
 
 ENV_ASSETS_DIR = "G1CTL_ASSETS_DIR"
-MANIFEST_PATH = Path(__file__).resolve().parent.parent / "configs" / "assets.yaml"
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,8 @@ class AssetManifest:
     files: tuple[AssetFile, ...]
 
 
-def load_manifest(path: Path = MANIFEST_PATH) -> AssetManifest:
+def load_manifest(path: Path | None = None) -> AssetManifest:
+    path = path or config_dir() / "assets.yaml"
     return from_dict(AssetManifest, load_yaml(path), source=str(path))
 
 

@@ -14,11 +14,9 @@ from typing import Literal
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES
 from hw.protocols.mit import MitRanges
+from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_config, load_yaml, preset_names, resolve_preset
 
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
-HARDWARE_DIR = CONFIG_DIR / "hardware"
-MOTORS_PATH = CONFIG_DIR / "motors.yaml"
 
 
 @dataclass(frozen=True)
@@ -104,7 +102,8 @@ class HardwareConfig:
     safety: SafetyConfig = field(default_factory=SafetyConfig)
 
 
-def load_motor_models(path: Path = MOTORS_PATH) -> dict[str, MitRanges]:
+def load_motor_models(path: Path | None = None) -> dict[str, MitRanges]:
+    path = path or config_dir() / "motors.yaml"
     data = load_yaml(path)
     if not isinstance(data, dict) or not isinstance(data.get("models"), dict):
         raise ConfigError(f"{path}: expected a 'models' mapping")
@@ -112,11 +111,11 @@ def load_motor_models(path: Path = MOTORS_PATH) -> dict[str, MitRanges]:
 
 
 def available_hardware() -> list[str]:
-    return preset_names(HARDWARE_DIR)
+    return preset_names(config_dir("hardware"))
 
 
 def hardware_config_path(name_or_path: str) -> Path:
-    return resolve_preset(name_or_path, HARDWARE_DIR, "hardware config")
+    return resolve_preset(name_or_path, config_dir("hardware"), "hardware config")
 
 
 def load_hardware_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig:

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -12,6 +15,8 @@ import pytest
 from onnx import TensorProto, helper, numpy_helper
 
 from controller.assets import Assets, ensure_assets
+from controller.planner import features as ft
+from hw import g1, quat
 from hw.g1 import JOINT_NAMES
 
 
@@ -70,3 +75,36 @@ def linear_onnx(tmp_path: Path) -> Callable[..., Path]:
         return make_linear_onnx(tmp_path / name, weight, **kwargs)  # type: ignore[arg-type]
 
     return factory
+
+
+G1CTL = [sys.executable, "-m", "controller.cli"]
+ROOT = Path(__file__).resolve().parent.parent  # the repository
+
+
+def g1ctl(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """The real CLI in a subprocess, run from the repository."""
+    return subprocess.run([*G1CTL, *args], capture_output=True, text=True, cwd=ROOT, env={**os.environ, **(env or {})}, timeout=300)
+
+
+def one_line_error(result: subprocess.CompletedProcess[str], code: int = 2) -> str:
+    """The single stderr line of a CLI run that ended with `code`, checked to be one line and no traceback."""
+    assert result.returncode == code, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    return lines[0]
+
+
+def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: int = 0) -> np.ndarray:
+    """A turning walk far from the origin, with tilt and joint motion."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(frames)
+    yaw = yaw0 + turn * t
+    qpos = np.zeros((frames, g1.QPOS_SIZE))
+    qpos[:, 0] = 5.0 + np.cumsum(0.03 * np.cos(yaw))
+    qpos[:, 1] = -3.0 + np.cumsum(0.03 * np.sin(yaw))
+    qpos[:, 2] = 0.78 + 0.01 * np.sin(t / 3)
+    tilt = quat.exp(np.stack((0.05 * np.sin(t / 5), 0.03 * np.cos(t / 4), np.zeros(frames)), axis=-1))
+    qpos[:, 3:7] = quat.multiply(ft.quat_from_yaw(yaw), tilt)
+    qpos[:, 7:] = 0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS))
+    return qpos

@@ -28,9 +28,9 @@ def test_hw_imports_neither_controller_nor_sim_nor_mujoco() -> None:
 
 def test_controller_hardware_path_and_planner_runtime_do_not_import_mujoco() -> None:
     code = (
-        "import sys; import controller.policy, controller.loop, controller.supervisor, controller.cli, "
+        "import sys; import controller.tracking.velocity_policy, controller.runtime.loop, controller.runtime.supervisor, controller.cli.main, "
         "controller.inputs.gamepad, controller.inputs.keyboard, controller.inputs.scripted, controller.assets, "
-        "controller.planner.runtime, controller.planner.dataset, controller.planner.baselines, controller.planner.metrics; "
+        "controller.planner.runtime, controller.motion_data.dataset, controller.bench.baselines, controller.bench.motion_metrics; "
         "print('mujoco' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)

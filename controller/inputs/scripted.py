@@ -10,9 +10,9 @@ import numpy as np
 
 from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
 from hw.errors import ConfigError
+from hw.shipped import config_dir
 from hw.yamlconfig import load_config, preset_names
 
-SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "configs" / "scenarios"
 
 
 @dataclass(frozen=True)
@@ -59,14 +59,14 @@ class Scenario:
 
 
 def available_scenarios() -> list[str]:
-    return preset_names(SCENARIO_DIR)
+    return preset_names(config_dir("scenarios"))
 
 
 def load_scenario(name_or_path: str) -> Scenario:
     """A shipped scenario by name, or a YAML file by path."""
     path = Path(name_or_path)
     if not (path.suffix in (".yaml", ".yml") and path.is_file()):
-        path = SCENARIO_DIR / f"{name_or_path}.yaml"
+        path = config_dir("scenarios") / f"{name_or_path}.yaml"
         if not path.is_file():
             raise ConfigError(
                 f"unknown scenario '{name_or_path}' (available: {', '.join(available_scenarios())}, or a path to a .yaml file)"

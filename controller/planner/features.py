@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from controller.planner import quat
+from hw import quat
 from hw import g1
 
 FloatArray = NDArray[np.float64]

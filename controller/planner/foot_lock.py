@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from controller.planner import quat
+from hw import quat
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -21,8 +21,8 @@ from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
 from controller.planner.request import Plan, PlanRequest, PlanRequestError
 from hw.errors import AssetError
+from hw.shipped import model_dir as model_dir_of
 
-DEFAULT_MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "planner"
 SPEC_VERSION = 1
 
 
@@ -41,7 +41,7 @@ class Planner:
 
     @classmethod
     def load(cls, model_dir: Path | None = None, threads: int = 1, foot_lock: bool = True, temperature: float | None = None) -> Planner:
-        folder = Path(model_dir) if model_dir is not None else DEFAULT_MODEL_DIR
+        folder = Path(model_dir) if model_dir is not None else model_dir_of("planner")
         spec_path = folder / "planner.json"
         try:
             spec = json.loads(spec_path.read_text())

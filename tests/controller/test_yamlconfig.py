@@ -7,11 +7,12 @@ from pathlib import Path
 import pytest
 
 from controller.inputs.scripted import Scenario
-from controller.policy import PolicyConfig
+from controller.tracking.velocity_policy import PolicyConfig
 from hw.errors import ConfigError
+from hw.shipped import config_dir
 from hw.yamlconfig import load_config
 
-POLICY_DIR = Path(__file__).resolve().parents[2] / "configs" / "policies"
+POLICY_DIR = config_dir("policies")
 
 
 def write(tmp_path: Path, text: str) -> Path:

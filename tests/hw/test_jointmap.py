@@ -8,8 +8,9 @@ import pytest
 
 from hw.errors import ConfigError
 from hw.jointmap import load_hardware_config
+from hw.shipped import config_dir
 
-SIM_CAN = Path(__file__).resolve().parents[2] / "configs" / "hardware" / "sim-can.yaml"
+SIM_CAN = config_dir("hardware", "sim-can.yaml")
 HIP_PITCH = "left_hip_pitch_joint: {bus: can0, protocol: mit, model: sim-leg-150, reply: cubemars, id: 1"
 
 

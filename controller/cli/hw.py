@@ -1,0 +1,148 @@
+"""`g1ctl hw ...`: bench bring-up against real or simulated hardware from a hardware config.
+
+g1ctl hw scan    --hardware sim-can
+g1ctl hw monitor --hardware sim-can [--seconds 5] [--refresh 0.2]
+g1ctl hw zero    --hardware my-robot --joint left_knee_joint [--yes]
+g1ctl hw sweep   --hardware my-robot --joint left_knee_joint [--fraction 0.3] [--speed 0.3] [--yes]
+g1ctl hw damp    --hardware my-robot [--seconds 2]
+g1ctl hw imu     --hardware my-robot [--seconds 1]
+g1ctl hw frame encode --protocol mit --model AK80-9 --position 1.0 --kp 50 --kd 1
+g1ctl hw frame decode --protocol unitree-rs485 fdee12...
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from hw.errors import ConfigError
+
+if TYPE_CHECKING:
+    from hw.hardware_robot import HardwareRobot
+
+
+def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    hw = sub.add_parser("hw", help="bench bring-up on real or simulated hardware")
+    hw_sub = hw.add_subparsers(dest="hw_command", required=True)
+
+    def with_hardware(name: str, help_text: str) -> argparse.ArgumentParser:
+        p = hw_sub.add_parser(name, help=help_text)
+        p.add_argument("--hardware", required=True, help="hardware config name (configs/hardware) or path")
+        p.add_argument("--rt-priority", type=int, default=0, help="run the bus cycle under SCHED_FIFO at this priority (1-99)")
+        p.add_argument("--cpu", type=int, default=None, help="pin the bus cycle to this CPU (ideally one kept free, e.g. by isolcpus)")
+        return p
+
+    with_hardware("scan", help_text="list the motors answering on each bus")
+    monitor = with_hardware("monitor", help_text="live table of every joint")
+    monitor.add_argument("--seconds", type=float, default=10.0)
+    monitor.add_argument("--refresh", type=float, default=0.25)
+    zero = with_hardware("zero", help_text="set a joint's encoder zero at its current position")
+    zero.add_argument("--joint", required=True)
+    zero.add_argument("--yes", action="store_true", help="do not ask for confirmation")
+    sweep = with_hardware("sweep", help_text="slow, low-gain move of one joint through part of its range and back")
+    sweep.add_argument("--joint", required=True)
+    sweep.add_argument("--fraction", type=float, default=0.3, help="share of the joint's range to sweep")
+    sweep.add_argument("--speed", type=float, default=0.3, help="rad/s")
+    sweep.add_argument("--yes", action="store_true", help="do not ask for confirmation")
+    damp = with_hardware("damp", help_text="damp every joint")
+    damp.add_argument("--seconds", type=float, default=2.0)
+    imu = with_hardware("imu", help_text="read the IMU")
+    imu.add_argument("--seconds", type=float, default=1.0)
+
+    frame = hw_sub.add_parser("frame", help="encode or decode one motor frame")
+    frame_sub = frame.add_subparsers(dest="frame_command", required=True)
+    enc = frame_sub.add_parser("encode", help="command values (motor side) -> data bytes as hex")
+    dec = frame_sub.add_parser("decode", help="data bytes as hex -> fields as JSON")
+    for p in (enc, dec):
+        p.add_argument("--protocol", required=True, choices=("mit", "unitree-rs485"))
+        p.add_argument("--model", default=None, help="MIT motor model (configs/motors.yaml)")
+    enc.add_argument("--id", type=int, default=1)
+    enc.add_argument("--mode", type=int, default=1, help="RS-485: 0 brake, 1 FOC, 2 calibrate")
+    for field in ("position", "velocity", "torque", "kp", "kd"):
+        enc.add_argument(f"--{field}", type=float, default=0.0)
+    dec.add_argument("hex", help="the frame's data bytes")
+    dec.add_argument("--reply", default=None, choices=("basic", "cubemars", "damiao"), help="MIT: decode as this reply variant")
+
+
+def run_hw(args: argparse.Namespace) -> int:
+    if args.hw_command == "frame":
+        return _frame(args)
+    from controller.runtime.hardware import open_hardware  # noqa: PLC0415
+    from hw import bringup  # noqa: PLC0415
+    from hw.realtime import request_realtime  # noqa: PLC0415
+
+    command = args.hw_command
+    request_realtime(args.rt_priority, args.cpu)
+    if command in ("zero", "sweep") and not args.yes and not _confirm(f"{command} {args.joint} on '{args.hardware}'?"):
+        print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
+        return 1
+    with open_hardware(args.hardware, args.assets_dir, require_all=command != "scan") as (host, pump):
+        if command == "scan":
+            for _ in range(5):
+                pump()
+            rows = bringup.probe(host)
+            print(bringup.format_table(rows, ("bus", "id", "joint", "answered", "position", "temperature", "error")))
+            missing = sum(not r["answered"] for r in rows)
+            print(f"{len(rows) - missing}/{len(rows)} motors answered")
+            return 1 if missing else 0
+        if command == "monitor":
+            _monitor(host, pump, args.seconds, args.refresh)
+            return 0
+        if command == "zero":
+            print(json.dumps(bringup.zero(host, args.joint)))
+            return 0
+        if command == "sweep":
+            result = bringup.sweep(host, args.joint, pump, fraction=args.fraction, speed=args.speed)
+            print(json.dumps(vars(result)))
+            return 0 if result.completed else 1
+        if command == "damp":
+            bringup.damp(host, pump, args.seconds)
+            print(f"damping on every joint ({host.cfg.safety.damping_kd} N m s/rad) for {args.seconds} s")
+            return 0
+        if command == "imu":
+            print(json.dumps(bringup.imu_summary(host, pump, args.seconds)))
+            return 0
+    raise AssertionError(command)
+
+
+def _monitor(host: HardwareRobot, pump: Callable[[], None], seconds: float, refresh: float) -> None:
+    from hw import bringup  # noqa: PLC0415
+
+    tty = sys.stdout.isatty()
+    cycles = max(int(refresh * 500), 1)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        for _ in range(cycles):
+            pump()
+        table = bringup.format_table(bringup.monitor_rows(host), ("joint", "q", "dq", "tau", "temp", "error", "age_ms"))
+        print(("\x1b[H\x1b[2J" if tty else "") + table, flush=True)
+        if not tty:
+            break  # a log gets one table, not a stream of them
+
+
+def _confirm(question: str) -> bool:
+    if not sys.stdin.isatty():
+        raise ConfigError(f"{question} needs confirmation: run it in a terminal or pass --yes")
+    return input(f"{question} [y/N] ").strip().lower() in ("y", "yes")
+
+
+def _frame(args: argparse.Namespace) -> int:
+    from hw.frames_cli import decode_frame, encode_frame  # noqa: PLC0415
+    from hw.jointmap import load_motor_models  # noqa: PLC0415
+
+    ranges = None
+    if args.model is not None:
+        models = load_motor_models()
+        if args.model not in models:
+            raise ConfigError(f"unknown motor model '{args.model}' (known: {', '.join(models)})")
+        ranges = models[args.model]
+    if args.frame_command == "encode":
+        values = {k: getattr(args, k) for k in ("position", "velocity", "torque", "kp", "kd")}
+        print(encode_frame(args.protocol, ranges, args.id, args.mode, values).hex())
+    else:
+        print(json.dumps(decode_frame(args.protocol, args.hex, ranges, args.reply)))
+    return 0

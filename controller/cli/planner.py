@@ -1,0 +1,175 @@
+"""`g1ctl train planner` and `g1ctl viz plan`.
+
+g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N]
+g1ctl viz plan --out plan.png [--model DIR] [--data DATASET] [--seeds 4] [--length 44]
+g1ctl viz plan --out plan.mp4 --target 1.2,0.4,0.8
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from controller.planner.request import Keyframe
+from hw.errors import ConfigError
+
+
+def add_planner_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    train = sub.add_parser("train", help="train models (needs the [train] extra: torch)")
+    train_sub = train.add_subparsers(dest="train_command", required=True)
+    planner = train_sub.add_parser("planner", help="train the in-betweening planner and export it to ONNX")
+    planner.add_argument("--data", type=Path, action="append", required=True, help="dataset folder (repeat for several)")
+    planner.add_argument("--out", type=Path, required=True, help="model folder: checkpoint, planner.onnx, planner.json")
+    planner.add_argument("--steps", type=int, default=None, help="training steps (default: the shipped model's)")
+    planner.add_argument("--seed", type=int, default=0)
+    planner.add_argument("--threads", type=int, default=2)
+    planner.add_argument("--no-progress", action="store_true")
+
+    viz = sub.add_parser("viz", help="pictures and videos of plans")
+    viz_sub = viz.add_subparsers(dest="viz_command", required=True)
+    plan = viz_sub.add_parser("plan", help="context, target keyframe and generated seeds as a filmstrip PNG or a video")
+    plan.add_argument("--out", type=Path, required=True, help=".png filmstrip, or .mp4/.gif video")
+    plan.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
+    plan.add_argument("--data", type=Path, default=None, help="take context and target from this dataset's test split")
+    plan.add_argument("--target", default="1.2,0.4,0.8", help="without --data: target root x,y (m) and heading (rad)")
+    plan.add_argument("--length", type=int, default=44, help="plan length in frames (multiple of 4, 24-64)")
+    plan.add_argument("--seeds", type=int, default=4)
+    plan.add_argument("--seed", type=int, default=0, help="which window of the data")
+    plan.add_argument("--temperature", type=float, default=None, help="sampling noise scale (default: the model's; higher varies more)")
+
+
+def run_train(args: argparse.Namespace) -> int:
+    try:
+        from controller.training.planner import TrainConfig, train_planner  # noqa: PLC0415 - needs torch
+    except ModuleNotFoundError as exc:
+        if exc.name != "torch":
+            raise
+        raise ConfigError("training needs torch: pip install -e '.[train]' (torch==2.13.0)") from exc
+    cfg = TrainConfig(seed=args.seed, threads=args.threads)
+    if args.steps is not None:
+        if args.steps < 1:
+            raise ConfigError(f"--steps must be at least 1, got {args.steps}")
+        cfg = replace(cfg, steps=args.steps)
+    summary = train_planner(args.data, args.out, cfg, progress=not args.no_progress)
+    print(json.dumps(summary))
+    print(f"model: {args.out}")
+    return 0
+
+
+@dataclass(frozen=True)
+class _Scene:
+    context: np.ndarray
+    truth: np.ndarray | None
+    request_keyframes: tuple[Keyframe, ...]
+
+
+def run_viz(args: argparse.Namespace) -> int:
+    from controller.assets import ensure_assets  # noqa: PLC0415
+    from controller.planner.request import PlanRequest  # noqa: PLC0415
+    from controller.planner.runtime import Planner  # noqa: PLC0415
+    from sim.world import build_model  # noqa: PLC0415 - imports MuJoCo
+
+    if args.out.suffix.lower() not in (".png", ".mp4", ".gif"):
+        raise ConfigError(f"--out must end in .png, .mp4 or .gif, got {args.out.name}")
+    if args.seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    scene = _scene_from_data(args) if args.data is not None else _scene_from_target(args)
+    planner = Planner.load(args.model, temperature=args.temperature)
+    request = PlanRequest(scene.context, scene.request_keyframes, (args.length,)).validated()
+    plans, _ = planner.sample(request, list(range(args.seeds)))
+    rows = {f"seed {s}": p for s, p in enumerate(plans)}
+    if scene.truth is not None:
+        rows = {"data": scene.truth[: plans.shape[1]]} | rows
+    model = build_model(ensure_assets(args.assets_dir).g1_mjcf)
+    lookat = np.array([*np.mean(plans[:, :, :2], axis=(0, 1)), 0.6])
+    if args.out.suffix.lower() == ".png":
+        _filmstrip(model, scene.context, rows, lookat, args.out)
+    else:
+        _video(model, scene.context, rows, lookat, args.out)
+    print(f"plan: {args.out}")
+    return 0
+
+
+def _scene_from_target(args: argparse.Namespace) -> _Scene:
+    from controller.planner.request import target_root  # noqa: PLC0415
+    from hw import g1  # noqa: PLC0415
+
+    try:
+        x, y, heading = (float(v) for v in args.target.split(","))
+    except ValueError as exc:
+        raise ConfigError(f"--target must be x,y,heading (three numbers), got '{args.target}'") from exc
+    stand = np.zeros(g1.QPOS_SIZE)
+    stand[2], stand[3] = g1.STANDING_PELVIS_HEIGHT, 1.0
+    stand[7:] = [g1.DEFAULT_JOINT_POS.get(j, 0.0) for j in g1.JOINT_NAMES]
+    return _Scene(np.tile(stand, (4, 1)), None, (target_root(args.length - 1, x, y, heading),))
+
+
+def _scene_from_data(args: argparse.Namespace) -> _Scene:
+    from controller.motion_data.dataset import load_dataset  # noqa: PLC0415
+
+    clips = [c for c in load_dataset(args.data, split="test") if len(c.qpos) >= 4 + args.length]
+    if not clips:
+        raise ConfigError(f"no test clip in {args.data} is long enough for a {args.length}-frame plan")
+    rng = np.random.default_rng(args.seed)
+    clip = clips[int(rng.integers(len(clips)))]
+    start = int(rng.integers(0, len(clip.qpos) - 4 - args.length + 1))
+    window = clip.qpos[start : start + 4 + args.length]
+    target = window[-1]
+    return _Scene(window[:4], window[4:], (Keyframe(args.length - 1, target),))
+
+
+def _columns(length: int, count: int = 6) -> list[int]:
+    return sorted({round(float(v)) for v in np.linspace(0, length - 1, count)})
+
+
+def _filmstrip(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    from sim.render import render_poses  # noqa: PLC0415
+
+    length = len(next(iter(rows.values())))
+    columns = _columns(length)
+    fig, axes = plt.subplots(len(rows), len(columns) + 1, figsize=(2.2 * (len(columns) + 1), 1.8 * len(rows)), squeeze=False)
+    context_image = render_poses(model, context[-1:], lookat)[0]
+    for r, (label, frames) in enumerate(rows.items()):
+        images = [context_image, *render_poses(model, frames[columns], lookat)]
+        titles = ["context", *(f"+{(c + 1) / 30:.2f} s" for c in columns)]
+        for c, (image, title) in enumerate(zip(images, titles, strict=True)):
+            ax = axes[r, c]
+            ax.imshow(image)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if r == 0:
+                ax.set_title(title, fontsize=8)
+        axes[r, 0].set_ylabel(label, fontsize=8)
+    fig.suptitle("planned motion: last context frame, then plan frames (the last column is the target frame)", fontsize=9)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _video(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
+    import imageio.v2 as imageio  # noqa: PLC0415
+
+    from sim.render import render_poses  # noqa: PLC0415
+
+    strips = [render_poses(model, np.concatenate((context, frames)), lookat, width=256, height=256) for frames in rows.values()]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    frames = [np.concatenate(row, axis=1) for row in zip(*strips, strict=True)]
+    if path.suffix.lower() == ".mp4":
+        writer = imageio.get_writer(str(path), fps=30, codec="libx264", quality=7, macro_block_size=8)
+    else:
+        writer = imageio.get_writer(str(path), mode="I", duration=1000.0 / 30, loop=0)
+    with writer:
+        for frame in frames:
+            writer.append_data(frame)
+    print(f"columns: {', '.join(rows)}", file=sys.stderr)

@@ -1,0 +1,157 @@
+"""Procedural waist and arm gestures for the recorded motion dataset: poses, motions, captions.
+
+Each gesture is a target for the upper-body joints (waist and both arms), static or
+oscillating, clamped inside the joint limits; `GesturePlayer` blends it over the policy's
+own targets with a weight that rises and falls with a smoothstep.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from controller.motion_data.dataset import GESTURES
+from hw.errors import ConfigError
+from hw.g1 import JOINT_NAMES
+from hw.types import FloatArray
+
+# --- gestures ------------------------------------------------------------------------------------
+
+UPPER_JOINTS: tuple[str, ...] = JOINT_NAMES[12:]  # waist (3), left arm (7), right arm (7)
+BLEND_S = 0.5
+_ARM = ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_roll", "wrist_pitch", "wrist_yaw")
+_MIRRORED = {"shoulder_roll", "shoulder_yaw", "wrist_roll", "wrist_yaw", "waist_yaw", "waist_roll"}
+
+GESTURE_PHRASES: dict[str, str] = {
+    "wave": "waving the right hand",
+    "raise_left": "with the left arm raised",
+    "raise_right": "with the right arm raised",
+    "raise_both": "with both arms raised",
+    "reach": "reaching forward with the right hand",
+    "point": "pointing to the front right",
+    "arms_crossed": "with arms crossed",
+    "hands_on_hips": "with hands on hips",
+}
+
+
+def with_gesture(caption: str, gesture: int) -> str:
+    """'walk forward slowly' + wave -> 'walk forward slowly while waving the right hand'."""
+    if gesture == 0:
+        return caption
+    phrase = GESTURE_PHRASES[GESTURES[gesture]]
+    if phrase.startswith("with "):
+        return f"{caption} {phrase}"
+    return f"{caption} and {phrase}" if " while " in caption else f"{caption} while {phrase}"
+
+
+def _arm(side: str, **angles: float) -> dict[str, float]:
+    """Joint targets of one arm given as the left arm's angles; the right arm's are mirrored."""
+    sign = -1.0 if side == "right" else 1.0
+    out = {}
+    for part, value in angles.items():
+        if part not in _ARM:
+            raise KeyError(part)
+        out[f"{side}_{part}_joint"] = sign * value if part in _MIRRORED else value
+    return out
+
+
+# Static poses (rad), chosen with forward kinematics: no self-contact, within the joint
+# limits, hands where the names say. Arm gains are low (kp 14), so the arms sag a little
+# under gravity; the recorded qpos is what the robot did, not these targets.
+_RAISED = {"shoulder_pitch": -2.8, "shoulder_roll": 0.45, "shoulder_yaw": 0.0, "elbow": 1.3, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+_WAVE = {"shoulder_pitch": -0.2, "shoulder_roll": 1.3, "shoulder_yaw": 1.4, "elbow": 0.0, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+_REACH = {"shoulder_pitch": -1.8, "shoulder_roll": 0.15, "shoulder_yaw": 0.0, "elbow": 1.35, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+_POINT = {"shoulder_pitch": -1.75, "shoulder_roll": 0.5, "shoulder_yaw": 0.0, "elbow": 1.5, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+_HIPS = {"shoulder_pitch": -0.1, "shoulder_roll": 1.16, "shoulder_yaw": -1.81, "elbow": -0.23, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+POSES: dict[str, dict[str, float]] = {
+    "wave": _arm("right", **_WAVE),
+    "raise_left": _arm("left", **_RAISED),
+    "raise_right": _arm("right", **_RAISED),
+    "raise_both": {**_arm("left", **_RAISED), **_arm("right", **_RAISED)},
+    "reach": _arm("right", **_REACH),
+    "point": {**_arm("right", **_POINT), "waist_yaw_joint": -0.15},
+    "arms_crossed": {  # left forearm above the right one
+        **_arm("left", shoulder_pitch=-0.98, shoulder_roll=-0.16, shoulder_yaw=-1.26, elbow=0.4, wrist_roll=0.0, wrist_pitch=0.0),
+        **_arm("right", shoulder_pitch=-0.6, shoulder_roll=-0.17, shoulder_yaw=-1.05, elbow=0.75, wrist_roll=0.0, wrist_pitch=0.0),
+    },
+    "hands_on_hips": {**_arm("left", **_HIPS), **_arm("right", **_HIPS)},
+}
+# Periodic parts: joint -> (amplitude rad, frequency Hz).
+MOTIONS: dict[str, dict[str, tuple[float, float]]] = {
+    "wave": {"right_elbow_joint": (0.4, 1.5)},
+    "reach": {"right_shoulder_pitch_joint": (0.12, 0.4), "right_elbow_joint": (0.12, 0.4)},
+    "point": {"waist_yaw_joint": (0.08, 0.3)},
+}
+# Joints that move in a part of the blend only, so that hands clear the thighs and each
+# other on the way: joint -> (a, b), the joint's own weight rises from 0 to 1 while the
+# gesture's weight goes from a to b (default 0 to 1).
+PHASES: dict[str, dict[str, tuple[float, float]]] = {
+    "hands_on_hips": {
+        **{f"{s}_{part}_joint": (0.0, 0.4) for s in ("left", "right") for part in ("shoulder_roll", "elbow")},
+        **{f"{s}_shoulder_yaw_joint": (0.4, 1.0) for s in ("left", "right")},
+    },
+    "arms_crossed": {f"right_{part}_joint": (0.3, 1.0) for part in _ARM},
+}
+
+
+def smoothstep(x: float) -> float:
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+class GesturePlayer:
+    """Upper-body joint targets of each gesture over time, blended with the policy's targets."""
+
+    def __init__(self, joint_names: tuple[str, ...], lower: FloatArray, upper: FloatArray, margin: float = 0.05) -> None:
+        self._index = np.array([joint_names.index(j) for j in UPPER_JOINTS])
+        lo, hi = lower[self._index] + margin, upper[self._index] - margin
+        self._targets: list[FloatArray] = [np.zeros(len(UPPER_JOINTS))]
+        self._masks: list[NDArray[np.bool_]] = [np.zeros(len(UPPER_JOINTS), dtype=bool)]
+        self._motions: list[list[tuple[int, float, float]]] = [[]]
+        self._phases: list[tuple[FloatArray, FloatArray]] = [(np.zeros(len(UPPER_JOINTS)), np.ones(len(UPPER_JOINTS)))]
+        for name in GESTURES[1:]:
+            pose = POSES[name]
+            target = np.zeros(len(UPPER_JOINTS))
+            mask = np.zeros(len(UPPER_JOINTS), dtype=bool)
+            for joint, value in pose.items():
+                k = UPPER_JOINTS.index(joint)
+                target[k], mask[k] = value, True
+            motions = [(UPPER_JOINTS.index(j), a, f) for j, (a, f) in MOTIONS.get(name, {}).items()]
+            for k, amplitude, _ in motions:
+                if not lo[k] <= target[k] - amplitude and target[k] + amplitude <= hi[k]:
+                    raise ConfigError(f"gesture '{name}' moves {UPPER_JOINTS[k]} past its joint limits")
+            outside = mask & ((target < lo) | (target > hi))
+            if outside.any():
+                raise ConfigError(f"gesture '{name}' puts {[UPPER_JOINTS[k] for k in np.flatnonzero(outside)]} past their joint limits")
+            a, b = np.zeros(len(UPPER_JOINTS)), np.ones(len(UPPER_JOINTS))
+            for joint, (start, stop) in PHASES.get(name, {}).items():
+                a[UPPER_JOINTS.index(joint)], b[UPPER_JOINTS.index(joint)] = start, stop
+            self._targets.append(target)
+            self._masks.append(mask)
+            self._motions.append(motions)
+            self._phases.append((a, b))
+
+    @property
+    def index(self) -> NDArray[np.int64]:
+        """Robot joint indices of `UPPER_JOINTS`."""
+        return self._index
+
+    def joint_weights(self, gesture: int, weight: float) -> FloatArray:
+        """How far each upper-body joint has moved to the gesture's target (0: policy, 1: gesture) at blend `weight`."""
+        a, b = self._phases[gesture]
+        return np.where(self._masks[gesture], np.clip((weight - a) / (b - a), 0.0, 1.0), 0.0)
+
+    def apply(self, q: FloatArray, gesture: int, weight: float, tau: float) -> FloatArray:
+        """`q` (the policy's targets, robot joint order) with gesture `gesture` blended in at `weight`, `tau` s into it."""
+        if gesture == 0 or weight <= 0.0:
+            return q
+        target = self._targets[gesture].copy()
+        for k, amplitude, freq in self._motions[gesture]:
+            target[k] += amplitude * math.sin(2.0 * math.pi * freq * tau)
+        weights = self.joint_weights(gesture, weight)
+        out = q.copy()
+        current = out[self._index]
+        out[self._index] = current + weights * (target - current)
+        return out

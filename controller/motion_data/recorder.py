@@ -1,0 +1,267 @@
+"""`g1ctl dataset record` / `import`: motion clips for the planner from the simulated G1 or CSV files.
+
+Recording runs the locomotion policy in MuJoCo under a seeded random command program
+(stand, start, stop, walk forward and backward at varied speeds, strafe, turn in place and
+while walking, speed changes; segments of 1.5-5 s) while, part of the time, the waist and
+arms follow a procedural gesture that overrides the policy's targets for those joints,
+blended in and out over 0.5 s with a smoothstep. The state is sampled at 30 fps (policy at
+50 Hz, physics at 500 Hz) with foot contacts from physics, the command, the gesture label
+and one caption per segment. Episodes last 60-120 s, each with its own seed; after a fall,
+the last 2 s before it are dropped and a new episode starts.
+
+Imports MuJoCo (through `sim`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm import tqdm
+
+from controller.assets import ensure_assets
+from controller.motion_data.gestures import GesturePlayer
+from controller.inputs.base import VelocityCommand
+from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
+from controller.motion_data.dataset import (
+    FPS,
+    MotionClip,
+    csv_files,
+    episode_seed,
+    import_csv_clips,
+    save_dataset,
+    split_for_seed,
+)
+from controller.tracking.presets import load_policy
+from controller.tracking.velocity_policy import OnnxPolicy
+from hw.errors import ConfigError
+from hw.g1 import JOINT_NAMES
+from hw.types import FloatArray, JointCommand, RobotState
+from sim.recorder import FrameSampler, restart
+from sim.robot import SimRobot
+from sim.world import build_model
+
+# --- recording -----------------------------------------------------------------------------------
+
+EPISODE_SECONDS = (60.0, 120.0)
+WARMUP_S = 1.0  # standing under the policy after a reset, not recorded
+DROP_BEFORE_FALL_S = 2.0
+MIN_CLIP_S = 2.0  # shorter remains of a fallen episode are dropped
+
+
+@dataclass(frozen=True)
+class RecordConfig:
+    out: Path
+    minutes: float
+    seed: int = 0
+    policy: str = "fastsac"
+    progress: bool = False
+    assets_dir: str | None = None
+    episode_seconds: tuple[float, float] = EPISODE_SECONDS
+
+
+@dataclass
+class Episode:
+    clip: MotionClip | None  # None: nothing kept (a fall too early)
+    fell: bool
+    sim_seconds: float  # simulated, including the warm-up and anything dropped
+
+
+class Recorder:
+    """Runs episodes on one simulated G1 and one policy."""
+
+    def __init__(self, policy: str, assets_dir: str | None) -> None:
+        assets = ensure_assets(assets_dir)
+        self.robot = SimRobot(build_model(assets.g1_mjcf))
+        self.policy: OnnxPolicy = load_policy(policy, assets, self.robot.joint_names)
+        if self.policy.joint_names != self.robot.joint_names:
+            raise ConfigError(f"policy '{policy}' must drive all {len(JOINT_NAMES)} G1 joints in the standard order to record gestures")
+        model = self.robot.model
+        ids = [model.joint(j).id for j in self.robot.joint_names]
+        self.gestures = GesturePlayer(self.robot.joint_names, model.jnt_range[ids, 0].copy(), model.jnt_range[ids, 1].copy())
+        self.sampler = FrameSampler(self.robot, FPS)
+        self.limits = self.policy.command_limits
+        self.dt = 1.0 / self.policy.cfg.rate_hz
+
+    def episode(self, seed: int, seconds: float, on_tick: Any = None) -> Episode:
+        """One episode of `seconds` recorded seconds with its own seed; stops early at a fall."""
+        rng = np.random.default_rng(seed)
+        robot, policy, sampler = self.robot, self.policy, self.sampler
+        restart(robot, yaw=float(rng.uniform(-math.pi, math.pi)))
+        policy.reset()
+        sim_start = robot.time
+        self._run(robot.time + WARMUP_S, lambda _t: (VelocityCommand(), 0, 0.0, 0.0))
+        segments = command_program(rng, seconds, self.limits)
+        starts = gesture_starts(segments)
+        frames = round(seconds * FPS)
+        sampler.start()
+        t0 = sampler.t0
+        cursor = [0]
+
+        def at(now: float) -> tuple[VelocityCommand, int, float, float]:
+            t = now - t0
+            i = cursor[0]
+            while i + 1 < len(segments) and t >= segments[i + 1].start - 1e-9:
+                i += 1
+            cursor[0] = i
+            seg = segments[i]
+            vx, vy, yaw = seg.command_at(t)
+            return VelocityCommand(vx, vy, yaw), seg.gesture, gesture_weight(segments, i, t), t - starts[i]
+
+        commands = np.zeros((frames, 3))
+        labels = np.zeros(frames, dtype=np.int16)
+        fell = self._run(t0 + (frames - 0.5) / FPS, at, on_tick, labels=(commands, labels))
+        keep = sampler.frames
+        if fell:
+            keep = max(0, round((robot.time - t0 - DROP_BEFORE_FALL_S) * FPS))
+        keep = min(keep, frames, sampler.frames)
+        sim_seconds = robot.time - sim_start
+        if keep < MIN_CLIP_S * FPS:
+            return Episode(None, fell, sim_seconds)
+        qpos, contacts = sampler.take(keep)
+        captions = tuple((round(s.start * FPS), s.caption) for s in segments if round(s.start * FPS) < keep)
+        clip = MotionClip(
+            name=f"rec-{seed}",
+            qpos=qpos,
+            contacts=contacts,
+            split=split_for_seed(seed),
+            command=commands[:keep],
+            gesture=labels[:keep],
+            captions=captions,
+            source="record",
+            seed=seed,
+        )
+        return Episode(clip, fell, sim_seconds)
+
+    def _hide_gesture(self, state: RobotState, gesture: int, weight: float) -> RobotState:
+        """The state as the policy sees it: joints under a gesture read as if they tracked the policy's own targets.
+
+        The locomotion policy never saw raised or crossed arms in training; observing them
+        throws its leg actions off (a raised arm felled the robot within 2 s). Hidden, it
+        balances the gesture's mass and reaction forces through the base orientation and
+        gyro alone, like the decoupled tracker of DESIGN.md.
+        """
+        w = self.gestures.joint_weights(gesture, weight)
+        idx = self.gestures.index
+        pos = state.joint_pos.copy()
+        vel = state.joint_vel.copy()
+        pos[idx] += w * (self.policy.last_target[idx] - pos[idx])
+        vel[idx] *= 1.0 - w
+        return dataclasses.replace(state, joint_pos=pos, joint_vel=vel)
+
+    def _run(self, until: float, at: Any, on_tick: Any = None, labels: tuple[FloatArray, NDArray[np.int16]] | None = None) -> bool:
+        """Policy ticks until time `until` (frames sampled on the way); True when the robot fell."""
+        robot, policy, sampler, dt = self.robot, self.policy, self.sampler, self.dt
+        while robot.time < until - 1e-9:
+            state = robot.read()
+            velocity, gesture, weight, tau = at(state.time)
+            if gesture and weight > 0.0:
+                state = self._hide_gesture(state, gesture, weight)
+            command = policy.step(state, velocity)
+            if gesture:
+                q = self.gestures.apply(command.q, gesture, weight, tau)
+                command = JointCommand(q=q, dq=command.dq, kp=command.kp, kd=command.kd, tau_ff=command.tau_ff)
+            robot.write(command)
+            before = sampler.frames
+            sampler.advance_to(state.time + dt)
+            if labels is not None and sampler.frames > before:
+                commands, gestures = labels
+                stop = min(sampler.frames, len(gestures))
+                commands[before:stop] = (velocity.vx, velocity.vy, velocity.yaw_rate)
+                gestures[before:stop] = gesture
+            if on_tick is not None:
+                on_tick(dt)
+            if robot.has_fallen():
+                return True
+        return False
+
+
+def record(cfg: RecordConfig) -> dict[str, Any]:
+    """Record `cfg.minutes` of motion into a dataset at `cfg.out`; returns a summary."""
+    if not (cfg.minutes > 0 and math.isfinite(cfg.minutes)):
+        raise ConfigError(f"--minutes must be positive, got {cfg.minutes}")
+    if cfg.seed < 0:
+        raise ConfigError(f"--seed must be 0 or more, got {cfg.seed}")
+    if cfg.out.exists() and not cfg.out.is_dir():
+        raise ConfigError(f"{cfg.out}: exists and is not a folder")
+    lo, hi = cfg.episode_seconds
+    recorder = Recorder(cfg.policy, cfg.assets_dir)
+    target = cfg.minutes * 60.0
+    clips: list[MotionClip] = []
+    falls = 0
+    kept = 0.0
+    sim_seconds = 0.0
+    wall_start = time.perf_counter()
+    with tqdm(total=round(target), unit="s", disable=not cfg.progress, desc="record", file=sys.stderr) as bar:
+        pending = [0.0]
+
+        def on_tick(dt: float) -> None:
+            pending[0] += dt
+            if pending[0] >= 1.0:
+                bar.update(1)
+                pending[0] -= 1.0
+
+        index = 0
+        while target - kept > 0.5 / FPS:
+            if index >= 1000:
+                raise ConfigError("more than 1000 episodes in one run; record in several runs with different seeds")
+            seed = episode_seed(cfg.seed, index)
+            rng = np.random.default_rng([seed, 1])
+            length = float(rng.uniform(lo, hi))
+            remaining = target - kept
+            if remaining <= hi:
+                length = remaining  # the last episode
+            elif remaining - length < lo:
+                length = remaining / 2  # no short last episode: two halves within [lo, hi] (when hi >= 2 lo)
+            episode = recorder.episode(seed, length, on_tick)
+            index += 1
+            sim_seconds += episode.sim_seconds
+            falls += episode.fell
+            if episode.clip is not None:
+                clips.append(episode.clip)
+                kept += episode.clip.seconds
+            bar.n = min(round(kept), round(target))
+            bar.refresh()
+    wall = time.perf_counter() - wall_start
+    extra = {"source": "record", "policy": cfg.policy, "falls": falls, "episodes": index}
+    save_dataset(cfg.out, clips, cfg.seed, extra=extra)
+    return {
+        "out": str(cfg.out),
+        "clips": len(clips),
+        "episodes": index,
+        "falls": falls,
+        "minutes": _minutes_per_split(clips),
+        "sim_seconds": round(sim_seconds, 2),
+        "wall_seconds": round(wall, 2),
+        "sim_seconds_per_wall_second": round(sim_seconds / wall, 2) if wall > 0 else None,
+    }
+
+
+def _minutes_per_split(clips: list[MotionClip]) -> dict[str, float]:
+    splits = ("train", "val", "test")
+    return {s: round(sum(c.seconds for c in clips if c.split == s) / 60.0, 2) for s in splits}
+
+
+def import_csv(csv: str | Path, out: Path, fps: float = 60.0, assets_dir: str | None = None) -> dict[str, Any]:
+    """Import G1 CSV clips (a file or a folder, recursively) at `fps` into a dataset at `out`."""
+    from sim.kinematics import G1Kinematics, foot_contacts  # noqa: PLC0415
+
+    root = Path(csv)
+    files = csv_files(root)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"{out}: exists and is not a folder")
+    kinematics = G1Kinematics(ensure_assets(assets_dir).g1_mjcf)
+
+    def contacts_of(qpos: FloatArray) -> NDArray[np.bool_]:
+        return foot_contacts(kinematics.forward(qpos)[2])
+
+    clips = import_csv_clips(files, root, fps, contacts_of)
+    save_dataset(out, clips, None, extra={"source": "csv", "csv_fps": fps})
+    return {"out": str(out), "clips": len(clips), "minutes": _minutes_per_split(clips)}

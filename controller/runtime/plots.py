@@ -1,0 +1,33 @@
+"""PNG plot of commanded against measured velocity."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from controller.runtime.tracking_metrics import TrackingMetrics
+
+
+def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:
+    t = np.asarray(metrics.times)
+    cmd = np.asarray(metrics.commanded).reshape(-1, 3)
+    meas = np.asarray(metrics.measured).reshape(-1, 3)
+    fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+    labels = ("vx (m/s)", "vy (m/s)", "yaw rate (rad/s)")
+    for i, (ax, label) in enumerate(zip(axes, labels, strict=True)):
+        ax.plot(t, meas[:, i], color="tab:blue", linewidth=0.8, label="measured")
+        ax.plot(t, cmd[:, i], color="tab:red", linewidth=1.5, drawstyle="steps-post", label="commanded")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper right")
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("time (s)")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

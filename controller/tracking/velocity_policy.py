@@ -1,0 +1,270 @@
+"""ONNX locomotion policy runner: robot state + velocity command -> joint PD command at 50 Hz.
+
+The ONNX file describes itself: joint names, kp and kd (and, where present, the action
+scale and command ranges) live in its metadata as JSON values. The YAML config declares
+the observation layout and may override any metadata value. Every dimension and joint
+name is checked when the policy loads.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import onnxruntime as ort
+
+from controller.inputs.base import CommandLimits, VelocityCommand
+from controller.tracking.observation import ObservationBuilder, ObservationLayout
+from hw.errors import ConfigError, PolicyError
+from hw.types import FloatArray, JointCommand, RobotState
+
+GRAVITY = np.array([0.0, 0.0, -1.0])
+
+
+@dataclass(frozen=True)
+class GaitConfig:
+    """Two-foot gait clock fed to the policy as sin/cos of each foot's phase."""
+
+    period: float = 1.0
+    stand_threshold: float = 0.01  # |command| below this holds both feet at phase pi (standing)
+
+
+@dataclass(frozen=True)
+class PolicyConfig:
+    onnx: str  # file name in the asset cache, or a path
+    observation: ObservationLayout
+    default_joint_pos: dict[str, float]  # joints not listed default to 0 rad
+    input_name: str = "actor_obs"
+    output_name: str = "action"
+    rate_hz: float = 50.0
+    action_scale: float | None = None  # None: from metadata 'action_scale', else an error
+    action_clip: float = 100.0
+    gait: GaitConfig = field(default_factory=GaitConfig)
+    kp: dict[str, float] | None = None  # per-joint overrides of the metadata gains
+    kd: dict[str, float] | None = None
+    damping_kd: float = 2.0
+    max_consecutive_nonfinite: int = 3  # this many bad outputs in a row latch damping
+
+
+def quat_rotate_inverse(q_wxyz: FloatArray, v: FloatArray) -> FloatArray:
+    """Rotate world vector `v` into the frame of unit quaternion `q` (w, x, y, z).
+
+    Written on scalars: it runs every control tick and numpy's small-array overhead
+    would cost more than the arithmetic.
+    """
+    w, x, y, z = q_wxyz.tolist()
+    vx, vy, vz = v.tolist()
+    k = 2.0 * w * w - 1.0
+    dot2 = 2.0 * (x * vx + y * vy + z * vz)
+    w2 = 2.0 * w
+    return np.array(
+        (
+            vx * k - (y * vz - z * vy) * w2 + x * dot2,
+            vy * k - (z * vx - x * vz) * w2 + y * dot2,
+            vz * k - (x * vy - y * vx) * w2 + z * dot2,
+        )
+    )
+
+
+class GaitClock:
+    """holosoma's gait phase: feet half a period apart; both at pi while standing."""
+
+    def __init__(self, cfg: GaitConfig, rate_hz: float) -> None:
+        self.cfg = cfg
+        self.dphase = 2.0 * math.pi / (rate_hz * cfg.period)
+        self.reset()
+
+    def reset(self) -> None:
+        self.phase = np.array([math.pi, math.pi])
+        self.standing = True
+
+    def advance(self, command: VelocityCommand) -> None:
+        self.phase = np.fmod(self.phase + self.dphase + math.pi, 2 * math.pi) - math.pi
+        lin = math.hypot(command.vx, command.vy)
+        if lin < self.cfg.stand_threshold and abs(command.yaw_rate) < self.cfg.stand_threshold:
+            self.phase[:] = math.pi
+            self.standing = True
+        elif self.standing:
+            self.phase = np.array([0.0, math.pi])
+            self.standing = False
+
+
+def _open_session(path: Path) -> ort.InferenceSession:
+    if not path.is_file():
+        raise PolicyError(f"policy file not found: {path}; run 'g1ctl assets fetch' or pass a valid path")
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.inter_op_num_threads = 1
+    options.log_severity_level = 3
+    try:
+        return ort.InferenceSession(str(path), sess_options=options, providers=["CPUExecutionProvider"])
+    except Exception as exc:  # onnxruntime raises its own Fail/InvalidGraph types
+        raise PolicyError(f"cannot load ONNX policy {path}: {exc}".splitlines()[0]) from exc
+
+
+class OnnxPolicy:
+    """Locomotion policy: `step(state, command)` returns the joint command for this tick."""
+
+    def __init__(self, path: Path, cfg: PolicyConfig, robot_joint_names: tuple[str, ...], source: str = "policy config") -> None:
+        self.cfg = cfg
+        self.path = path
+        self._session = _open_session(path)
+        meta = {k: _json_or_text(v) for k, v in self._session.get_modelmeta().custom_metadata_map.items()}
+        self.joint_names = _metadata_joint_names(meta, path)
+        n = len(self.joint_names)
+        cfg.observation.check(n, source)
+        self._check_io(cfg, n)
+        missing = [j for j in self.joint_names if j not in robot_joint_names]
+        if missing:
+            raise PolicyError(f"{path.name}: joints {missing} are not on the robot (robot joints: {len(robot_joint_names)})")
+        unknown = [j for j in cfg.default_joint_pos if j not in self.joint_names]
+        if unknown:
+            raise ConfigError(f"{source}: default_joint_pos names unknown joints {unknown}")
+        # Robot array index of each policy joint (a plain slice when the orders agree).
+        order = [robot_joint_names.index(j) for j in self.joint_names]
+        self.robot_index: slice | np.ndarray = slice(None) if order == list(range(len(robot_joint_names))) else np.array(order)
+        self.kp = self._gains("kp", meta, cfg.kp, source)
+        self.kd = self._gains("kd", meta, cfg.kd, source)
+        self.default_pos = np.array([cfg.default_joint_pos.get(j, 0.0) for j in self.joint_names])
+        scale = cfg.action_scale if cfg.action_scale is not None else meta.get("action_scale")
+        if scale is None:
+            raise PolicyError(f"{path.name}: no action scale in metadata; set 'action_scale' in {source}")
+        self.action_scale = np.broadcast_to(np.asarray(scale, float), (n,)).copy()
+        self.command_limits = _command_limits(meta)
+        self.obs = ObservationBuilder(cfg.observation)
+        self.gait = GaitClock(cfg.gait, cfg.rate_hz)
+        self._slot = {t.name: self.obs.slot(t.name) for t in cfg.observation.terms}
+        self._zeros = np.zeros(n)
+        self._damp_kd = np.full(n, cfg.damping_kd)
+        self.nonfinite_events = 0
+        self.latched_fault: str | None = None
+        self.reset()
+
+    def _check_io(self, cfg: PolicyConfig, n: int) -> None:
+        inputs = {i.name: i.shape for i in self._session.get_inputs()}
+        outputs = {o.name: o.shape for o in self._session.get_outputs()}
+        name = self.path.name
+        if cfg.input_name not in inputs:
+            raise PolicyError(f"{name}: no input '{cfg.input_name}' (inputs: {', '.join(inputs)}); fix 'input_name' in the policy config")
+        if cfg.output_name not in outputs:
+            raise PolicyError(
+                f"{name}: no output '{cfg.output_name}' (outputs: {', '.join(outputs)}); fix 'output_name' in the policy config"
+            )
+        in_dim = inputs[cfg.input_name][-1]
+        if isinstance(in_dim, int) and in_dim != cfg.observation.size:
+            raise PolicyError(
+                f"{name}: input '{cfg.input_name}' takes {in_dim} values but the observation layout makes {cfg.observation.size}"
+            )
+        out_dim = outputs[cfg.output_name][-1]
+        if isinstance(out_dim, int) and out_dim != n:
+            raise PolicyError(f"{name}: output '{cfg.output_name}' has {out_dim} values but the metadata names {n} joints")
+
+    def _gains(self, key: str, meta: dict[str, object], override: dict[str, float] | None, source: str) -> FloatArray:
+        values = meta.get(key)
+        if values is None:
+            if override is None or set(override) != set(self.joint_names):
+                raise PolicyError(
+                    f"{self.path.name}: no '{key}' in metadata; give all {len(self.joint_names)} joints under '{key}' in {source}"
+                )
+            return np.array([override[j] for j in self.joint_names])
+        gains = np.asarray(values, float)
+        if gains.shape != (len(self.joint_names),):
+            raise PolicyError(f"{self.path.name}: metadata '{key}' has {gains.size} values for {len(self.joint_names)} joints")
+        for joint, value in (override or {}).items():
+            if joint not in self.joint_names:
+                raise ConfigError(f"{source}: '{key}' override names unknown joint '{joint}'")
+            gains[self.joint_names.index(joint)] = value
+        return gains
+
+    def reset(self) -> None:
+        self.obs.reset()
+        self.gait.reset()
+        self.last_action = np.zeros(len(self.joint_names))
+        self.last_target = self.default_pos.copy()
+        self._consecutive_bad = 0
+        self.latched_fault = None
+
+    def observe(self, state: RobotState, command: VelocityCommand) -> np.ndarray:
+        """Assemble the policy input for this tick (raw values into their slots, then one scaling)."""
+        raw, slot, idx = self.obs.raw, self._slot, self.robot_index
+        raw[slot["dof_pos"]] = state.joint_pos[idx]
+        raw[slot["dof_pos"]] -= self.default_pos
+        raw[slot["dof_vel"]] = state.joint_vel[idx]
+        raw[slot["actions"]] = self.last_action
+        if "base_ang_vel" in slot:
+            raw[slot["base_ang_vel"]] = state.base_ang_vel
+        if "projected_gravity" in slot:
+            raw[slot["projected_gravity"]] = quat_rotate_inverse(state.base_quat, GRAVITY)
+        if "base_lin_vel" in slot:
+            raw[slot["base_lin_vel"]] = quat_rotate_inverse(state.base_quat, state.base_lin_vel)
+        if "command_lin_vel" in slot:
+            raw[slot["command_lin_vel"]] = (command.vx, command.vy)
+        if "command_ang_vel" in slot:
+            raw[slot["command_ang_vel"]] = command.yaw_rate
+        if "sin_phase" in slot or "cos_phase" in slot:
+            p0, p1 = self.gait.phase.tolist()
+            if "sin_phase" in slot:
+                raw[slot["sin_phase"]] = (math.sin(p0), math.sin(p1))
+            if "cos_phase" in slot:
+                raw[slot["cos_phase"]] = (math.cos(p0), math.cos(p1))
+        return self.obs.commit()
+
+    def infer(self, obs: np.ndarray) -> FloatArray:
+        out = self._session.run([self.cfg.output_name], {self.cfg.input_name: obs})[0]
+        return np.asarray(out, float).reshape(-1)
+
+    def step(self, state: RobotState, command: VelocityCommand) -> JointCommand:
+        """One control tick. A non-finite output holds the last safe target; repeated ones latch damping."""
+        if self.latched_fault is not None:
+            return self.damping_command()
+        action = self.infer(self.observe(state, command))
+        if not math.isfinite(float(action.sum())):  # one reduction catches any NaN or inf
+            self.nonfinite_events += 1
+            self._consecutive_bad += 1
+            if self._consecutive_bad >= self.cfg.max_consecutive_nonfinite:
+                self.latched_fault = f"policy produced non-finite actions {self._consecutive_bad} ticks in a row"
+                return self.damping_command()
+            target = self.last_target
+        else:
+            self._consecutive_bad = 0
+            clip = self.cfg.action_clip
+            action = np.minimum(np.maximum(action, -clip), clip)
+            self.last_action = action
+            target = action * self.action_scale + self.default_pos
+            self.last_target = target
+        self.gait.advance(command)
+        return JointCommand(q=target, dq=self._zeros, kp=self.kp, kd=self.kd, tau_ff=self._zeros)
+
+    def damping_command(self) -> JointCommand:
+        return JointCommand(q=self.last_target, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros)
+
+
+def _json_or_text(text: str) -> object:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def _metadata_joint_names(meta: dict[str, object], path: Path) -> tuple[str, ...]:
+    names = meta.get("dof_names") or meta.get("joint_names")
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or not names:
+        raise PolicyError(f"{path.name}: metadata has no joint name list ('dof_names'); export the policy with its joint names")
+    if len(set(names)) != len(names):
+        raise PolicyError(f"{path.name}: metadata joint names repeat")
+    return tuple(names)
+
+
+def _command_limits(meta: dict[str, object]) -> CommandLimits:
+    ranges = meta.get("command_ranges")
+    if not isinstance(ranges, dict):
+        return CommandLimits()
+
+    def pair(key: str) -> tuple[float, float]:
+        lo, hi = ranges.get(key, (-1.0, 1.0))
+        return float(lo), float(hi)
+
+    return CommandLimits(vx=pair("lin_vel_x"), vy=pair("lin_vel_y"), yaw_rate=pair("ang_vel_yaw"))

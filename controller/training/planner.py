@@ -1,0 +1,306 @@
+"""`g1ctl train planner`: fit the in-betweening model on CPU, checkpointed and resumable, then export ONNX.
+
+The model is conditional flow matching in a compact linear latent: the residual over the
+anchor curve (64 frames x 38 values) is standardized per channel and projected on its
+leading principal components (fitted on training windows; whitened). A small MLP learns the
+velocity field from Gaussian noise to that latent given the conditioning vector; sampling
+integrates it in a few Euler steps. Why: a latent of ~100 numbers makes each step a few
+hundred thousand multiply-adds (milliseconds on one CPU core for a whole plan), the
+flow gives different plausible motions per seed, and the anchor curve meets the
+constraints exactly whatever is sampled. Requires torch (`pip install -e .[train]`).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+import warnings
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+from tqdm import tqdm
+
+from controller.planner import encoding as enc
+from controller.motion_data.dataset import load_dataset
+from controller.training.windows import WindowSampler
+from hw.errors import ConfigError
+
+log = logging.getLogger(__name__)
+
+CHECKPOINT = "checkpoint.pt"
+ONNX_FILE = "planner.onnx"
+SPEC_FILE = "planner.json"
+SPEC_VERSION = 1
+MODEL_KEYS = ("batch", "lr", "width", "depth", "latent", "pca_windows", "seed")  # a resumed run may change the rest (steps, threads)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    steps: int = 12000
+    batch: int = 256
+    lr: float = 1e-3
+    width: int = 512
+    depth: int = 3
+    latent: int = 128
+    sampling_steps: int = 4
+    temperature: float = 0.35  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
+    pca_windows: int = 20000
+    seed: int = 0
+    threads: int = 2
+    checkpoint_every: int = 500
+
+
+class FlowNet(nn.Module):
+    """Velocity field v(x_t, t | cond) in the whitened latent; the conditioning is encoded once per plan."""
+
+    cond_mean: torch.Tensor
+    cond_std: torch.Tensor
+
+    def __init__(self, cfg: TrainConfig, cond_mean: np.ndarray, cond_std: np.ndarray) -> None:
+        super().__init__()
+        self.register_buffer("cond_mean", torch.as_tensor(cond_mean, dtype=torch.float32))
+        self.register_buffer("cond_std", torch.as_tensor(cond_std, dtype=torch.float32))
+        w = cfg.width
+        self.cond_in = nn.Sequential(nn.Linear(enc.COND_DIM, w), nn.SiLU(), nn.Linear(w, w))
+        self.x_in = nn.Linear(cfg.latent, w)
+        self.t_in = nn.Linear(32, w)
+        self.blocks = nn.ModuleList(nn.Sequential(nn.SiLU(), nn.Linear(w, w)) for _ in range(cfg.depth))
+        self.out = nn.Sequential(nn.SiLU(), nn.Linear(w, cfg.latent))
+
+    def encode(self, cond: torch.Tensor) -> torch.Tensor:
+        return self.cond_in((cond - self.cond_mean) / self.cond_std)
+
+    def velocity(self, x: torch.Tensor, t: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
+        h = self.x_in(x) + self.t_in(time_embedding(t)) + c
+        for block in self.blocks:
+            h = h + block(h)
+        return self.out(h)
+
+
+def time_embedding(t: torch.Tensor) -> torch.Tensor:
+    freqs = torch.exp(torch.linspace(0.0, math.log(100.0), 16))  # 1 to 100 cycles over t in [0, 1]
+    angles = 2 * math.pi * t[:, None] * freqs[None]
+    return torch.cat((torch.sin(angles), torch.cos(angles)), dim=-1)
+
+
+class Sampler(nn.Module):
+    """What is exported: noise and conditioning in, residual [B, 64, 38] out (Euler steps unrolled)."""
+
+    mean: torch.Tensor
+    basis: torch.Tensor
+    scale: torch.Tensor
+
+    def __init__(self, net: FlowNet, steps: int, mean: np.ndarray, basis: np.ndarray, scale: np.ndarray) -> None:
+        super().__init__()
+        self.net, self.steps = net, steps
+        self.register_buffer("mean", torch.as_tensor(mean, dtype=torch.float32))
+        self.register_buffer("basis", torch.as_tensor(basis, dtype=torch.float32))  # [K, F*38], whitening folded in
+        self.register_buffer("scale", torch.as_tensor(scale, dtype=torch.float32))  # [38]
+
+    def forward(self, cond: torch.Tensor, noise: torch.Tensor) -> torch.Tensor:
+        c = self.net.encode(cond)
+        x = noise
+        for i in range(self.steps):
+            t = torch.full((x.shape[0],), i / self.steps)
+            x = x + self.net.velocity(x, t, c) / self.steps
+        flat = x @ self.basis + self.mean
+        return flat.reshape(-1, enc.FRAMES, enc.OUT_CHANNELS) * self.scale
+
+
+@dataclass
+class LatentCodec:
+    """Per-channel scale, then PCA: residual [.., F, 38] <-> whitened latent [.., K]."""
+
+    scale: np.ndarray  # [38]
+    mean: np.ndarray  # [F*38]
+    components: np.ndarray  # [K, F*38], orthonormal rows
+    sigma: np.ndarray  # [K]
+
+    @classmethod
+    def fit(cls, residuals: np.ndarray, latent: int) -> tuple[LatentCodec, float]:
+        scale = np.sqrt(np.mean(residuals**2, axis=(0, 1))) + 1e-3
+        flat = (residuals / scale).reshape(len(residuals), -1)
+        mean = flat.mean(axis=0)
+        cov = np.cov(flat - mean, rowvar=False)
+        eigval, eigvec = np.linalg.eigh(cov)
+        order = np.argsort(eigval)[::-1][:latent]
+        explained = float(eigval[order].sum() / eigval.sum())
+        return cls(scale, mean, eigvec[:, order].T.copy(), np.sqrt(np.maximum(eigval[order], 1e-8))), explained
+
+    def encode(self, residuals: np.ndarray) -> np.ndarray:
+        flat = (residuals / self.scale).reshape(len(residuals), -1)
+        return ((flat - self.mean) @ self.components.T) / self.sigma
+
+    def decode_basis(self) -> np.ndarray:
+        return self.components * self.sigma[:, None]
+
+
+def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = TrainConfig(), progress: bool = True) -> dict[str, object]:
+    """Train (or resume) into `out_dir`; write the ONNX planner and its spec. Returns a summary."""
+    torch.set_num_threads(cfg.threads)
+    torch.manual_seed(cfg.seed)  # weights, flow noise and times: a run is repeatable on one machine
+    out_dir.mkdir(parents=True, exist_ok=True)
+    train = _sampler(data_dirs, "train")
+    val = _sampler(data_dirs, "val")
+    checkpoint_path = out_dir / CHECKPOINT
+    started = time.monotonic()
+    if checkpoint_path.is_file():
+        state = torch.load(checkpoint_path, weights_only=False)
+        changed = {k: state["config"][k] for k in MODEL_KEYS if state["config"][k] != getattr(cfg, k)}
+        if changed:
+            raise ConfigError(f"{checkpoint_path} holds a model with other settings {changed}; use a new --out or the same settings")
+        codec, cond_stats, explained = state["codec"], state["cond_stats"], state["explained"]
+        log.info("resuming from step %d", state["step"])
+    else:
+        state = None
+        codec, cond_stats, explained = _fit_statistics(train, cfg)
+    net = FlowNet(cfg, *cond_stats)
+    optimizer = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=1e-4)
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: _learning_rate_factor(s, cfg.steps))
+    rng = np.random.default_rng(cfg.seed + 1)
+    step, elapsed_before, history = 0, 0.0, []
+    if state is not None:
+        net.load_state_dict(state["model"])
+        optimizer.load_state_dict(state["optimizer"])
+        schedule.load_state_dict(state["schedule"])
+        rng.bit_generator.state = state["rng"]
+        torch.set_rng_state(state["torch_rng"])
+        step, elapsed_before, history = state["step"], state["elapsed_s"], state["history"]
+    bar = tqdm(total=cfg.steps, initial=step, desc="train planner", disable=not progress, unit="step")
+    running = 0.0
+    while step < cfg.steps:
+        batch = train.sample(rng, cfg.batch)
+        x1 = torch.as_tensor(codec.encode(batch.target), dtype=torch.float32)
+        loss = _flow_loss(net, x1, torch.as_tensor(batch.cond, dtype=torch.float32))
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+        optimizer.step()
+        schedule.step()
+        step += 1
+        running = 0.98 * running + 0.02 * loss.item() if step > 1 else loss.item()
+        bar.update(1)
+        bar.set_postfix(loss=f"{running:.3f}")
+        if step % cfg.checkpoint_every == 0 or step == cfg.steps:
+            val_loss = _validation_loss(net, val, codec)
+            history.append({"step": step, "train_loss": round(running, 4), "val_loss": round(val_loss, 4)})
+            _save_checkpoint(
+                checkpoint_path,
+                net,
+                optimizer,
+                schedule,
+                rng,
+                step,
+                elapsed_before + time.monotonic() - started,
+                history,
+                cfg,
+                codec,
+                cond_stats,
+                explained,
+            )
+    bar.close()
+    elapsed = elapsed_before + time.monotonic() - started
+    export_onnx(out_dir, net, codec, cfg)
+    summary = {
+        "steps": step,
+        "train_seconds": round(elapsed, 1),
+        "latent_explained_variance": round(explained, 4),
+        "history": history[-5:],
+        "parameters": sum(p.numel() for p in net.parameters()),
+    }
+    (out_dir / "training.json").write_text(
+        json.dumps(summary | {"config": asdict(cfg), "data": [str(d) for d in data_dirs]}, indent=2) + "\n"
+    )
+    return summary
+
+
+def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfig) -> Path:
+    sampler = Sampler(net, cfg.sampling_steps, codec.mean, codec.decode_basis(), codec.scale).eval()
+    cond = torch.zeros(1, enc.COND_DIM)
+    noise = torch.zeros(1, cfg.latent)
+    path = out_dir / ONNX_FILE
+    with torch.no_grad(), warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # the TorchScript exporter: no extra dependency, exact graph
+        torch.onnx.export(
+            sampler, (cond, noise), str(path), input_names=["cond", "noise"], output_names=["residual"],
+            dynamic_axes={"cond": {0: "batch"}, "noise": {0: "batch"}, "residual": {0: "batch"}}, opset_version=17, dynamo=False,
+        )  # fmt: skip
+    spec = {
+        "version": SPEC_VERSION,
+        "onnx": ONNX_FILE,
+        "latent": cfg.latent,
+        "cond_dim": enc.COND_DIM,
+        "frames": enc.FRAMES,
+        "out_channels": enc.OUT_CHANNELS,
+        "sampling_steps": cfg.sampling_steps,
+        "temperature": cfg.temperature,
+        "fps": 30,
+        "legs": _leg_chains(),
+    }
+    (out_dir / SPEC_FILE).write_text(json.dumps(spec, indent=2) + "\n")
+    return path
+
+
+def _leg_chains() -> list[dict[str, Any]]:
+    """The G1 leg chains for the runtime's foot locking, read from the same MJCF the data was recorded with."""
+    from controller.assets import ensure_assets  # noqa: PLC0415
+    from sim.kinematics import leg_chain_specs  # noqa: PLC0415 - imports MuJoCo
+    from sim.world import build_model  # noqa: PLC0415
+
+    return leg_chain_specs(build_model(ensure_assets(quiet=True).g1_mjcf))
+
+
+def _sampler(data_dirs: list[Path], split: str) -> WindowSampler:
+    groups = [[(c.qpos, c.contacts.astype(np.float64)) for c in load_dataset(d, split=split)] for d in data_dirs]
+    if not any(groups):
+        raise ConfigError(f"no '{split}' clips in {', '.join(map(str, data_dirs))}; record one with 'g1ctl dataset record'")
+    return WindowSampler(groups)
+
+
+def _fit_statistics(train: WindowSampler, cfg: TrainConfig) -> tuple[LatentCodec, tuple[np.ndarray, np.ndarray], float]:
+    rng = np.random.default_rng(cfg.seed)
+    batches = [train.sample(rng, 1000) for _ in range(max(cfg.pca_windows // 1000, 1))]
+    residuals = np.concatenate([b.target for b in batches])
+    conds = np.concatenate([b.cond for b in batches])
+    codec, explained = LatentCodec.fit(residuals, cfg.latent)
+    log.info("latent of %d components keeps %.1f%% of the residual variance", cfg.latent, 100 * explained)
+    return codec, (conds.mean(axis=0), conds.std(axis=0) + 1e-3), explained
+
+
+def _learning_rate_factor(step: int, total: int) -> float:
+    """Linear warm-up over the first 5% of steps, then a cosine decay to zero."""
+    warmup = max(total // 20, 1)
+    return min(1.0, (step + 1) / warmup) * 0.5 * (1.0 + math.cos(math.pi * min(step / total, 1.0)))
+
+
+def _flow_loss(net: FlowNet, x1: torch.Tensor, cond: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+    x0 = torch.randn(x1.shape, generator=generator)
+    t = torch.rand(x1.shape[0], generator=generator)
+    xt = (1 - t[:, None]) * x0 + t[:, None] * x1
+    return torch.mean((net.velocity(xt, t, net.encode(cond)) - (x1 - x0)) ** 2)
+
+
+def _validation_loss(net: FlowNet, val: WindowSampler, codec: LatentCodec) -> float:
+    batch = val.sample(np.random.default_rng(1234), 1024)
+    with torch.no_grad():  # its own noise stream: the training stream is left where it was
+        x1 = torch.as_tensor(codec.encode(batch.target), dtype=torch.float32)
+        return float(_flow_loss(net, x1, torch.as_tensor(batch.cond, dtype=torch.float32), torch.Generator().manual_seed(1234)))
+
+
+def _save_checkpoint(path: Path, net, optimizer, schedule, rng, step, elapsed, history, cfg, codec, cond_stats, explained) -> None:
+    tmp = path.with_suffix(".tmp")
+    torch.save(
+        {
+            "model": net.state_dict(), "optimizer": optimizer.state_dict(), "schedule": schedule.state_dict(),
+            "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "step": step, "elapsed_s": elapsed, "history": history,
+            "config": asdict(cfg), "codec": codec, "cond_stats": cond_stats, "explained": explained,
+        },
+        tmp,
+    )  # fmt: skip
+    tmp.replace(path)

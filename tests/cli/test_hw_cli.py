@@ -1,0 +1,156 @@
+"""Bring-up commands and `sim --hardware` through the real CLI against simulated hardware."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from hw.shipped import config_dir
+from tests.conftest import g1ctl, one_line_error
+
+
+def test_frame_encode_decode_mit() -> None:
+    result = g1ctl(
+        "hw",
+        "frame",
+        "encode",
+        "--protocol",
+        "mit",
+        "--model",
+        "AK80-9",
+        "--position",
+        "1.0",
+        "--velocity",
+        "2.0",
+        "--kp",
+        "50",
+        "--kd",
+        "1",
+        "--torque",
+        "3",
+    )
+    assert result.returncode == 0 and result.stdout.strip() == "8a3c851199333954"
+    decoded = json.loads(g1ctl("hw", "frame", "decode", "--protocol", "mit", "--model", "AK80-9", "8a3c851199333954").stdout)
+    assert decoded["kind"] == "command" and decoded["kp"] == pytest.approx(50, abs=0.2)
+    reply = json.loads(
+        g1ctl("hw", "frame", "decode", "--protocol", "mit", "--model", "AK80-9", "--reply", "cubemars", "057fff7ff7fffb01").stdout
+    )
+    assert reply["motor_id"] == 5 and reply["error"] == "motor over-temperature" and reply["temperature"] == -5
+    special = json.loads(g1ctl("hw", "frame", "decode", "--protocol", "mit", "fffffffffffffffc").stdout)
+    assert special == {"kind": "special", "special": "enter"}
+
+
+def test_frame_encode_decode_rs485() -> None:
+    result = g1ctl(
+        "hw",
+        "frame",
+        "encode",
+        "--protocol",
+        "unitree-rs485",
+        "--id",
+        "1",
+        "--mode",
+        "1",
+        "--torque",
+        "0.5",
+        "--velocity",
+        "1.0",
+        "--position",
+        "0.1",
+        "--kp",
+        "0.2",
+        "--kd",
+        "0.05",
+    )
+    frame = result.stdout.strip()
+    assert frame.startswith("feee1180002800090200000001400046") and len(frame) == 34
+    decoded = json.loads(g1ctl("hw", "frame", "decode", "--protocol", "unitree-rs485", frame).stdout)
+    assert decoded["kind"] == "command" and decoded["motor_id"] == 1 and decoded["torque"] == 0.5
+
+
+def test_frame_bad_input_is_one_line() -> None:
+    assert "CRC mismatch" in one_line_error(
+        g1ctl("hw", "frame", "decode", "--protocol", "unitree-rs485", "feee118000280009020000000140004691")
+    )
+    assert "not hex" in one_line_error(g1ctl("hw", "frame", "decode", "--protocol", "mit", "--model", "AK80-9", "zz"))
+    assert "unknown motor model 'AK99'" in one_line_error(g1ctl("hw", "frame", "encode", "--protocol", "mit", "--model", "AK99"))
+    assert "must be 8 bytes" in one_line_error(g1ctl("hw", "frame", "decode", "--protocol", "mit", "--model", "AK80-9", "7fff"))
+    assert "motor id must be 0-15" in one_line_error(g1ctl("hw", "frame", "encode", "--protocol", "unitree-rs485", "--id", "16"))
+
+
+def test_scan_finds_every_motor_on_simulated_buses() -> None:
+    result = g1ctl("hw", "scan", "--hardware", "sim-mixed")
+    assert result.returncode == 0, result.stderr
+    assert "29/29 motors answered" in result.stdout
+    assert "rs485_left" in result.stdout and "can1" in result.stdout
+
+
+def test_sweep_imu_damp_zero_on_simulated_hardware() -> None:
+    sweep = g1ctl("hw", "sweep", "--hardware", "sim-can", "--joint", "left_elbow_joint", "--fraction", "0.1", "--speed", "1.0", "--yes")
+    assert sweep.returncode == 0, sweep.stderr
+    result = json.loads(sweep.stdout)
+    assert result["completed"] and result["low"] < result["high"]
+    imu = json.loads(g1ctl("hw", "imu", "--hardware", "sim-can", "--seconds", "0.2").stdout)
+    assert imu["frames"] >= 90 and imu["crc_errors"] == 0 and imu["linear_acceleration"][2] == pytest.approx(9.81, abs=0.01)
+    assert g1ctl("hw", "damp", "--hardware", "sim-can", "--seconds", "0.1").returncode == 0
+    zero = json.loads(g1ctl("hw", "zero", "--hardware", "sim-mixed", "--joint", "left_knee_joint", "--yes").stdout)
+    assert zero["zero_offset"] == pytest.approx(-0.669, abs=0.01)
+
+
+def test_bringup_bad_input_is_one_line() -> None:
+    line = one_line_error(g1ctl("hw", "scan", "--hardware", "moon-robot"))
+    assert "unknown hardware config 'moon-robot'" in line and "sim-can" in line
+    line = one_line_error(g1ctl("hw", "sweep", "--hardware", "sim-can", "--joint", "left_knee", "--yes"))
+    assert "unknown joint 'left_knee'" in line
+    line = one_line_error(g1ctl("hw", "zero", "--hardware", "sim-can", "--joint", "left_knee_joint"))
+    assert "pass --yes" in line
+    line = one_line_error(g1ctl("hw", "damp", "--hardware", "sim-can", "--rt-priority", "120"))
+    assert "real-time priority 120 is out of range" in line
+
+
+def test_joint_map_with_duplicate_id_is_named(tmp_path: Path) -> None:
+    text = config_dir("hardware", "sim-can.yaml").read_text()
+    bad = tmp_path / "dup.yaml"
+    bad.write_text(
+        text.replace(
+            "left_hip_roll_joint: {bus: can0, protocol: mit, model: sim-leg-150, reply: cubemars, id: 2",
+            "left_hip_roll_joint: {bus: can0, protocol: mit, model: sim-leg-150, reply: cubemars, id: 1",
+        )
+    )
+    line = one_line_error(g1ctl("hw", "scan", "--hardware", str(bad)))
+    assert "left_hip_pitch_joint and left_hip_roll_joint share motor id 1 on bus 'can0'" in line
+    missing = tmp_path / "missing.yaml"
+    missing.write_text("\n".join(ln for ln in text.splitlines() if not ln.strip().startswith("right_wrist_yaw_joint")))
+    assert "joints missing from the joint map: right_wrist_yaw_joint" in one_line_error(g1ctl("hw", "scan", "--hardware", str(missing)))
+
+
+def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
+    report_path = tmp_path / "hw.json"
+    result = g1ctl("sim", "--hardware", "sim-can", "--duration", "3", "--report", str(report_path))
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["falls"] == 0 and report["final_base_position"][0] > 0.5
+    hw = report["hw"]
+    assert hw["faults"] == 0 and hw["frames_received"] > 29 * 1400
+    assert set(hw["cycle_ms"]) == {"p50", "p99"} and hw["crc_errors"] == 0
+
+
+def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
+    report_path = tmp_path / "lossy.json"
+    result = g1ctl(
+        "sim", "--hardware", "sim-can", "--faults", "configs/faults/lossy-can.yaml", "--duration", "1.5", "--report", str(report_path)
+    )
+    assert result.returncode == 0, result.stderr
+    hw = json.loads(report_path.read_text())["hw"]
+    assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
+
+    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", "configs/faults/overheat-left-knee.yaml", "--duration", "1")
+    assert overheat.returncode == 1
+    assert "left_knee_joint" in overheat.stderr and "over-temperature" in overheat.stderr
+
+    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("buses:\n  can9: {drop_reply_prob: 0.1}\n")
+    assert "buses ['can9'] are not in the hardware config" in one_line_error(g1ctl("sim", "--hardware", "sim-can", "--faults", str(bad)))

@@ -1,0 +1,20 @@
+"""The benchmarks run and report what they promise (no timing is asserted: that is their job, not a test's)."""
+
+from __future__ import annotations
+
+from controller.bench.hw import run_hw_bench
+from controller.bench.loop import run_loop_bench
+
+
+def test_loop_bench_reports_both_loops() -> None:
+    report = run_loop_bench("fastsac", rounds=1, duration=2.0, assets_dir=None)
+    assert report["stack_rtf"] > 0 and report["minimal_rtf"] > 0
+    assert report["ratio"] == round(report["stack_rtf"] / report["minimal_rtf"], 3)
+
+
+def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
+    report = run_hw_bench(seconds=0.6)
+    assert report["cycles"] > 100
+    assert set(report["cycle_ms"]) == set(report["raw_round_trip_ms"]) == {"p50", "p99"}
+    assert report["counters"]["frames_received"] >= 29 * report["cycles"]
+    assert report["counters"]["crc_errors"] == 0

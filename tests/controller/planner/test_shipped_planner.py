@@ -1,0 +1,44 @@
+"""The shipped planner (models/planner) loads with onnxruntime alone and plans plausible, constraint-exact motion."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from controller.planner.request import Keyframe, PlanRequest, target_root
+from controller.planner.runtime import Planner
+from hw import g1, quat
+from hw.shipped import model_dir
+
+pytestmark = pytest.mark.skipif(not (model_dir("planner") / "planner.onnx").is_file(), reason="no shipped planner model")
+
+
+def _standing() -> np.ndarray:
+    stand = np.zeros(g1.QPOS_SIZE)
+    stand[2], stand[3] = g1.STANDING_PELVIS_HEIGHT, 1.0
+    stand[7:] = g1.default_joint_vector()
+    return np.tile(stand, (4, 1))
+
+
+def test_walks_from_standing_to_a_target_root() -> None:
+    planner = Planner.load()
+    plan = planner.plan(PlanRequest(_standing(), (target_root(43, 1.0, 0.3, 0.5),), lengths=(44,), seed=3))
+    assert plan.qpos.shape == (44, 36) and plan.contacts.shape == (44, 2)
+    assert np.allclose(plan.qpos[43, :2], [1.0, 0.3]) and np.isclose(quat.heading(plan.qpos[43, 3:7]), 0.5, atol=1e-3)
+    assert np.all((plan.qpos[:, 2] > 0.6) & (plan.qpos[:, 2] < 0.9))  # the pelvis stays at walking height
+    assert np.abs(plan.qpos[0, :3] - _standing()[-1, :3]).max() < 0.05  # continues the context
+    steps = np.abs(np.diff(plan.qpos[:, 7:19], axis=0)).sum()
+    assert steps > 1.0  # the legs move: it walks there rather than gliding
+    assert plan.contacts.any(axis=1).mean() > 0.8  # mostly a foot on the ground
+
+
+def test_arm_keyframe_is_met_and_seeds_differ() -> None:
+    planner = Planner.load()
+    pose = _standing()[-1].copy()
+    pose[7 + g1.JOINT_NAMES.index("right_shoulder_pitch_joint")] = -1.5
+    arms = np.zeros(g1.NUM_JOINTS, dtype=bool)
+    arms[15:] = True
+    request = PlanRequest(_standing(), (Keyframe(20, pose, joints=arms, root=False, root_height=False),), lengths=(32,), seed=0)
+    plans, _ = planner.sample(request.validated(), [0, 1, 2])
+    assert np.allclose(plans[:, 20, 7 + 15 :], pose[7 + 15 :])
+    assert np.ptp(plans[:, 25:, :2], axis=0).max() > 1e-3  # generative: the seeds disagree where nothing is constrained
