@@ -7,6 +7,8 @@ holosoma-inference 0.1.3, Apache-2.0).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 JOINT_NAMES: tuple[str, ...] = (
     "left_hip_pitch_joint", "left_hip_roll_joint", "left_hip_yaw_joint",
     "left_knee_joint", "left_ankle_pitch_joint", "left_ankle_roll_joint",
@@ -57,3 +59,54 @@ STANDING_PELVIS_HEIGHT = 0.78
 def default_joint_vector() -> list[float]:
     """Default pose as a list in `JOINT_NAMES` order."""
     return [DEFAULT_JOINT_POS.get(name, 0.0) for name in JOINT_NAMES]
+
+
+# ---- qpos layout ----------------------------------------------------------------------------
+
+QPOS_ROOT_POS = slice(0, 3)  # root position xyz (m, world frame)
+QPOS_ROOT_QUAT = slice(3, 7)  # root quaternion w, x, y, z
+QPOS_JOINTS = slice(7, QPOS_SIZE)  # joint angles in JOINT_NAMES order
+QVEL_SIZE = 6 + NUM_JOINTS  # MuJoCo qvel: root linear velocity (world), root angular velocity (body), joints
+QVEL_ROOT_LIN = slice(0, 3)
+QVEL_ROOT_ANG = slice(3, 6)
+QVEL_JOINTS = slice(6, QVEL_SIZE)
+
+
+# ---- joint groups ---------------------------------------------------------------------------
+# Picked from JOINT_NAMES by name, so each group is in joint order whatever the counts.
+
+
+def _joints_where(side: str, parts: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(name for name in JOINT_NAMES if name.startswith(f"{side}_") and name.split("_")[1] in parts)
+
+
+_LEG_PARTS, _ARM_PARTS = ("hip", "knee", "ankle"), ("shoulder", "elbow", "wrist")
+LEFT_LEG_JOINTS = _joints_where("left", _LEG_PARTS)
+RIGHT_LEG_JOINTS = _joints_where("right", _LEG_PARTS)
+WAIST_JOINTS = tuple(name for name in JOINT_NAMES if name.startswith("waist_"))
+LEFT_ARM_JOINTS = _joints_where("left", _ARM_PARTS)
+RIGHT_ARM_JOINTS = _joints_where("right", _ARM_PARTS)
+LEG_JOINTS = tuple(name for name in JOINT_NAMES if name in LEFT_LEG_JOINTS + RIGHT_LEG_JOINTS)
+ARM_JOINTS = tuple(name for name in JOINT_NAMES if name in LEFT_ARM_JOINTS + RIGHT_ARM_JOINTS)
+UPPER_BODY_JOINTS = tuple(name for name in JOINT_NAMES if name in WAIST_JOINTS + ARM_JOINTS)
+
+
+def joint_indices(group: Iterable[str], qpos: bool = False) -> list[int]:
+    """Indices of the named joints, in the order given, in the joint vector (or in `qpos` with `qpos=True`).
+
+    A list, not a tuple, so that it indexes numpy arrays as one axis.
+    """
+    offset = QPOS_JOINTS.start if qpos else 0
+    unknown = [name for name in group if name not in JOINT_NAMES]
+    if unknown:
+        raise ValueError(f"unknown G1 joints {unknown}; valid names are in hw.g1.JOINT_NAMES")
+    return [offset + JOINT_NAMES.index(name) for name in group]
+
+
+def joint_slice(group: Iterable[str], qpos: bool = False) -> slice:
+    """The slice of the joint vector (or of `qpos`) that holds exactly `group`, which must be one run in joint order."""
+    names = tuple(group)
+    index = joint_indices(names, qpos)
+    if not index or index != list(range(index[0], index[0] + len(index))):
+        raise ValueError(f"joints {list(names)} are not one contiguous run in joint order; index them with joint_indices")
+    return slice(index[0], index[-1] + 1)
