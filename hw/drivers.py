@@ -27,17 +27,6 @@ CAN_ERR_CRTL = 0x04  # SocketCAN error classes (linux/can/error.h): controller p
 CAN_ERR_BUSOFF = 0x40
 
 
-@dataclass(frozen=True)
-class MotorCommand:
-    """Motor-side PD command (rotor units)."""
-
-    q: float
-    dq: float
-    kp: float
-    kd: float
-    tau: float
-
-
 @dataclass
 class BusCounters:
     frames_sent: int = 0

@@ -49,8 +49,10 @@ def decode_frame(protocol: str, hex_text: str, ranges: mit.MitRanges | None, rep
     if protocol == "unitree-rs485":
         try:
             if data[:2] == rs485.COMMAND_HEADER:
-                cmd = rs485.decode_command(data)
-                return {"kind": "command", **vars(cmd)}
+                frame = rs485.decode_command(data)
+                c = frame.command
+                fields = {"torque": c.torque, "speed": c.velocity, "position": c.position, "kp": c.kp, "kd": c.kd}
+                return {"kind": "command", "motor_id": frame.motor_id, "mode": frame.mode, **fields}
             rep = rs485.decode_reply(data)
         except rs485.FrameError as exc:
             raise ConfigError(str(exc)) from exc

@@ -17,7 +17,6 @@ import time
 
 import can
 
-from hw.drivers import MotorCommand
 from hw.emulation.faults import FaultPlan
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
@@ -138,10 +137,7 @@ class MitBusEmulator(_Emulator):
         with self.plant.lock:
             for motor_id, (motor, ranges, variant) in self.motors.items():
                 data = self._pending.pop(motor_id, None)
-                command = None
-                if data is not None:
-                    c = mit.decode_command(ranges, data)  # quantized exactly as the firmware sees it
-                    command = MotorCommand(q=c.position, dq=c.velocity, kp=c.kp, kd=c.kd, tau=c.torque)
+                command = None if data is None else mit.decode_command(ranges, data)  # quantized as the firmware sees it
                 code = DAMIAO_COIL_OVER_TEMPERATURE if variant == "damiao" else CUBEMARS_OVER_TEMPERATURE
                 self._inject(motor_id, motor, code)
                 motor.apply(self.plant, command, code, motor_id in self.faults.stuck)
@@ -180,7 +176,7 @@ class Rs485PortEmulator(_Emulator):
         self.motors = motors
         self.crc_errors = 0
         self._splitter = rs485.FrameSplitter(rs485.COMMAND_HEADER, rs485.COMMAND_SIZE)
-        self._pending: dict[int, rs485.MotorCommand] = {}
+        self._pending: dict[int, rs485.CommandFrame] = {}
         self._mode: dict[int, int] = dict.fromkeys(motors, rs485.MODE_BRAKE)
         self._status: dict[int, bytes] = {}
 
@@ -233,7 +229,7 @@ class Rs485PortEmulator(_Emulator):
                     motor.enabled, motor.error_code = False, 0  # brake clears a latched error
                 elif cmd is not None:
                     motor.enabled = True
-                    command = MotorCommand(q=cmd.position, dq=cmd.speed, kp=cmd.kp, kd=cmd.kd, tau=cmd.torque)
+                    command = cmd.command
                 motor.apply(self.plant, command, RS485_OVERHEAT, motor_id in self.faults.stuck)
 
     def motor_ids(self) -> list[int]:

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hw.drivers import MotorCommand
 from hw.emulation.plant import Plant
 from hw.hardware_robot import motor_to_joint
 from hw.jointmap import JointConfig
+from hw.protocols.command import MotorCommand
 
 AMBIENT_C = 30.0
 HEATING_C_PER_S = 5.0  # at the motor's full torque
@@ -53,12 +53,12 @@ class EmulatedMotor:
             c = self._last_command
             if c is not None and self.enabled:
                 position, velocity, _ = self.reading(plant)
-                pushed = c.kp * (c.q - position) + c.kd * (c.dq - velocity) + c.tau
+                pushed = c.kp * (c.position - position) + c.kd * (c.velocity - velocity) + c.torque
                 self.stalled_torque = max(-self.torque_max, min(self.torque_max, pushed))
         elif not self.enabled or self.error_code != 0 or (command is None and expired):
             plant.set_joint_command(self.joint_name, 0.0, 0.0, 0.0, 0.0, 0.0)  # limp
         elif command is not None:
-            q, dq, tau = motor_to_joint(self.joint, command.q + self.encoder_zero, command.dq, command.tau)
+            q, dq, tau = motor_to_joint(self.joint, command.position + self.encoder_zero, command.velocity, command.torque)
             g2 = self.joint.gear_ratio**2
             plant.set_joint_command(self.joint_name, q, dq, command.kp * g2, command.kd * g2, tau)
 

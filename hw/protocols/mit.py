@@ -20,6 +20,8 @@ from typing import Literal
 
 import numpy as np
 
+from hw.protocols.command import MotorCommand
+
 ENTER_MOTOR_MODE = bytes.fromhex("fffffffffffffffc")
 EXIT_MOTOR_MODE = bytes.fromhex("fffffffffffffffd")
 SET_ZERO = bytes.fromhex("fffffffffffffffe")
@@ -67,15 +69,6 @@ class MitRanges:
 
 
 @dataclass(frozen=True)
-class MitCommand:
-    position: float
-    velocity: float
-    kp: float
-    kd: float
-    torque: float
-
-
-@dataclass(frozen=True)
 class MitReply:
     motor_id: int
     position: float
@@ -114,7 +107,7 @@ def encode_command(r: MitRanges, position: float, velocity: float, kp: float, kd
     )
 
 
-def decode_command(r: MitRanges, data: bytes) -> MitCommand:
+def decode_command(r: MitRanges, data: bytes) -> MotorCommand:
     """The firmware's side: the command values an 8-byte frame carries."""
     if len(data) != 8:
         raise ValueError(f"MIT command must be 8 bytes, got {len(data)}")
@@ -123,7 +116,7 @@ def decode_command(r: MitRanges, data: bytes) -> MitCommand:
     kp_u = ((data[3] & 0xF) << 8) | data[4]
     kd_u = (data[5] << 4) | (data[6] >> 4)
     t = ((data[6] & 0xF) << 8) | data[7]
-    return MitCommand(
+    return MotorCommand(
         position=uint_to_float(p, -r.p_max, r.p_max, 16),
         velocity=uint_to_float(v, -r.v_max, r.v_max, 12),
         kp=uint_to_float(kp_u, 0.0, r.kp_max, 12),

@@ -16,6 +16,7 @@ import math
 import struct
 from dataclasses import dataclass
 
+from hw.protocols.command import MotorCommand
 from hw.protocols.crc import FrameError, check_crc_frame, crc16_kermit
 
 __all__ = ["FrameError"]  # re-exported: callers catch it from here
@@ -38,14 +39,12 @@ _REPLY = struct.Struct("<2sBhhibH")
 
 
 @dataclass(frozen=True)
-class MotorCommand:
+class CommandFrame:
+    """What one command frame carries: the motor it addresses, its mode and the PD command."""
+
     motor_id: int
     mode: int
-    torque: float
-    speed: float
-    position: float
-    kp: float
-    kd: float
+    command: MotorCommand
 
 
 @dataclass(frozen=True)
@@ -89,18 +88,13 @@ def encode_command(motor_id: int, mode: int, torque: float, speed: float, positi
     return body + struct.pack("<H", crc16_kermit(body))
 
 
-def decode_command(frame: bytes) -> MotorCommand:
+def decode_command(frame: bytes) -> CommandFrame:
     check_crc_frame(frame, COMMAND_SIZE, COMMAND_HEADER, "RS-485 command")
     _, id_mode, tau, dq, q, kp, kd = _CMD.unpack_from(frame)
-    return MotorCommand(
-        id_mode & 0x0F,
-        (id_mode >> 4) & 0x07,
-        tau / _TORQUE_SCALE,
-        dq / _SPEED_SCALE,
-        q / _POSITION_SCALE,
-        kp / _GAIN_SCALE,
-        kd / _GAIN_SCALE,
+    command = MotorCommand(
+        position=q / _POSITION_SCALE, velocity=dq / _SPEED_SCALE, kp=kp / _GAIN_SCALE, kd=kd / _GAIN_SCALE, torque=tau / _TORQUE_SCALE
     )
+    return CommandFrame(id_mode & 0x0F, (id_mode >> 4) & 0x07, command)
 
 
 def encode_reply(motor_id: int, mode: int, torque: float, speed: float, position: float, temperature: int, error_code: int = 0) -> bytes:

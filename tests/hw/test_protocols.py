@@ -99,13 +99,14 @@ def test_rs485_command_golden() -> None:
 
 def test_rs485_negative_values_truncate_toward_zero_and_clamp() -> None:
     frame = rs485.encode_command(15, rs485.MODE_BRAKE, -0.999 / 256, -1e9, -math.pi, 100.0, -1.0)
-    cmd = rs485.decode_command(frame)
+    decoded = rs485.decode_command(frame)
+    assert (decoded.motor_id, decoded.mode) == (15, rs485.MODE_BRAKE)
     assert frame[2] == 0x0F
     assert frame[3:5] == b"\x00\x00"  # -0.999 truncates to 0
     assert frame[5:7] == (-32768).to_bytes(2, "little", signed=True)
     assert frame[7:11] == (-16384).to_bytes(4, "little", signed=True)
     assert frame[11:13] == b"\xff\xff" and frame[13:15] == b"\x00\x00"
-    assert cmd.position == pytest.approx(-math.pi)
+    assert decoded.command.position == pytest.approx(-math.pi)
 
 
 def test_rs485_reply_round_trip_and_error_bits() -> None:
