@@ -27,12 +27,13 @@ from controller.motion_data.dataset import (
 from hw import quat
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES, STANDING_PELVIS_HEIGHT, default_joint_vector
-from tests.conftest import g1ctl, one_line_error
+from tests.conftest import ROOT, g1ctl, one_line_error
 
 if TYPE_CHECKING:
     from controller.motion_data.recorder import Recorder
 
-G1_MOVES = Path(os.environ.get("G1_MOVES_DIR", "/work/shared/data/g1-moves"))
+# The g1-moves clips sit beside the repository (../shared/data/g1-moves), or where G1_MOVES_DIR says.
+G1_MOVES = Path(os.environ.get("G1_MOVES_DIR", ROOT.parent / "shared" / "data" / "g1-moves"))
 
 
 def standing_qpos(frames: int, yaw: float = 0.0) -> np.ndarray:
