@@ -301,11 +301,11 @@ class Rs485BusDriver(BusDriver):
     def _handle(self, frame: bytes, late: bool = False) -> int | None:
         try:
             reply = rs485.decode_reply(frame)
-        except rs485.FrameError as exc:
-            if "CRC" in str(exc):
-                self.counters.crc_errors += 1
-            else:
-                self.counters.bad_frames += 1
+        except rs485.CrcError:
+            self.counters.crc_errors += 1
+            return None
+        except rs485.FrameError:
+            self.counters.bad_frames += 1
             return None
         j = self.slot.get(reply.motor_id)
         if j is None:

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import serial
 
 from hw.protocols import imu as imu_frame
-from hw.protocols.unitree_rs485 import FrameError, FrameSplitter
+from hw.protocols.crc import CrcError, FrameError
+from hw.protocols.unitree_rs485 import FrameSplitter
 from hw.transport import read_waiting
 
 
@@ -42,11 +43,11 @@ class SerialImu:
         for frame in self._splitter.feed(data):
             try:
                 sample = imu_frame.decode_imu(frame)
-            except FrameError as exc:
-                if "CRC" in str(exc):
-                    self.counters.crc_errors += 1
-                else:
-                    self.counters.bad_frames += 1
+            except CrcError:
+                self.counters.crc_errors += 1
+                continue
+            except FrameError:
+                self.counters.bad_frames += 1
                 continue
             if self.latest is not None and (sample.sequence - self.latest.sequence) & 0xFFFF != 1:
                 self.counters.sequence_gaps += 1

@@ -27,6 +27,10 @@ class FrameError(ValueError):
     """A frame with the wrong length, header or CRC."""
 
 
+class CrcError(FrameError):
+    """A frame whose CRC does not match its bytes: corrupted on the wire (counted apart from malformed frames)."""
+
+
 def check_crc_frame(frame: bytes, size: int, header: bytes, what: str) -> None:
     """Length, two-byte header and trailing little-endian CRC-16/KERMIT of a fixed-size frame."""
     if len(frame) != size:
@@ -36,4 +40,4 @@ def check_crc_frame(frame: bytes, size: int, header: bytes, what: str) -> None:
     crc = crc16_kermit(frame[:-2])
     stored = frame[-2] | (frame[-1] << 8)
     if crc != stored:
-        raise FrameError(f"{what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
+        raise CrcError(f"{what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")

@@ -17,9 +17,9 @@ import struct
 from dataclasses import dataclass
 
 from hw.protocols.command import MotorCommand
-from hw.protocols.crc import FrameError, check_crc_frame, crc16_kermit
+from hw.protocols.crc import CrcError, FrameError, check_crc_frame, crc16_kermit
 
-__all__ = ["FrameError"]  # re-exported: callers catch it from here
+__all__ = ["CrcError", "FrameError"]  # re-exported: callers catch them from here
 
 COMMAND_HEADER = b"\xfe\xee"
 REPLY_HEADER = b"\xfd\xee"

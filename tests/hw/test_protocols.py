@@ -122,12 +122,12 @@ def test_rs485_reply_round_trip_and_error_bits() -> None:
 def test_rs485_bad_crc_length_and_header() -> None:
     frame = bytearray(rs485.encode_reply(2, 1, 0.0, 0.0, 0.0, 30))
     frame[5] ^= 0x01
-    with pytest.raises(rs485.FrameError, match="CRC mismatch"):
+    with pytest.raises(rs485.CrcError, match="CRC mismatch"):
         rs485.decode_reply(bytes(frame))
-    with pytest.raises(rs485.FrameError, match="16 bytes, got 15"):
-        rs485.decode_reply(bytes(frame[:15]))
-    with pytest.raises(rs485.FrameError, match="header"):
-        rs485.decode_reply(b"\xfe\xee" + bytes(frame[2:]))
+    for malformed, what in ((bytes(frame[:15]), "16 bytes, got 15"), (b"\xfe\xee" + bytes(frame[2:]), "header")):
+        with pytest.raises(rs485.FrameError, match=what) as caught:
+            rs485.decode_reply(malformed)
+        assert not isinstance(caught.value, rs485.CrcError)  # counted as a bad frame, not a CRC error
 
 
 def test_gear_ratio_and_direction_conversions() -> None:
@@ -168,7 +168,7 @@ def test_imu_frame_round_trip_and_crc() -> None:
     assert back.angular_velocity == pytest.approx((0.1, -0.2, 0.3))
     broken = bytearray(frame)
     broken[30] ^= 0xFF
-    with pytest.raises(rs485.FrameError, match="CRC"):
+    with pytest.raises(rs485.CrcError, match="CRC"):
         imu.decode_imu(bytes(broken))
 
 
