@@ -16,8 +16,8 @@ import numpy as np
 
 from hw.drivers import MitBusDriver
 from hw.errors import ConfigError, HardwareFault
-from hw.hardware_robot import HardwareRobot, Lifecycle, motor_to_joint
-from hw.jointmap import JointConfig
+from hw.hardware_robot import HardwareRobot, Lifecycle
+from hw.jointmap import JointConfig, motor_to_joint
 from hw.protocols import mit
 from hw.types import JointCommand
 

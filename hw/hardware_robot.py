@@ -44,13 +44,6 @@ class Lifecycle(enum.Enum):
     CLOSED = "closed"
 
 
-def motor_to_joint(j: JointConfig, position: float, velocity: float, torque: float) -> tuple[float, float, float]:
-    """Motor-side reading -> joint side. The inverse, used for commands: q_m = s (q - offset) g,
-    dq_m = s dq g, tau_m = s tau / g, kp_m = kp / g^2, kd_m = kd / g^2 (s: direction, g: gear ratio)."""
-    g, s = j.gear_ratio, j.direction
-    return s * position / g + j.zero_offset, s * velocity / g, s * torque * g
-
-
 class HardwareRobot(RobotInterface):
     def __init__(
         self,
@@ -300,7 +293,7 @@ class HardwareRobot(RobotInterface):
         )
 
     def _motor_side(self, limp: bool, damping: bool, command: JointCommand | None) -> tuple[np.ndarray, ...]:
-        """Joint side -> motor side for every joint at once (the inverse of `motor_to_joint`)."""
+        """Joint side -> motor side for every joint at once (`hw.jointmap.joint_to_motor` on arrays)."""
         if command is not None:
             q, dq, kp, kd, tau = command.q, command.dq, command.kp, command.kd, command.tau_ff
         elif damping:

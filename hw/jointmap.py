@@ -18,7 +18,6 @@ from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_config, load_yaml, preset_names, resolve_preset
 
 
-
 @dataclass(frozen=True)
 class BusConfig:
     """A CAN bus (python-can interface + channel) or a serial port (device path or pyserial URL)."""
@@ -73,6 +72,19 @@ class JointConfig:
                 raise ValueError(
                     f"a CAN motor id with {self.reply} replies must be 1-{top} (the reply carries it in byte 0), got {self.id}"
                 )
+
+
+def motor_to_joint(j: JointConfig, position: float, velocity: float, torque: float) -> tuple[float, float, float]:
+    """Motor-side reading -> joint side: q = s q_m / g + offset, dq = s dq_m / g, tau = s tau_m g
+    (s: direction, g: gear ratio). Gains go the other way as kp_m = kp / g^2, kd_m = kd / g^2."""
+    g, s = j.gear_ratio, j.direction
+    return s * position / g + j.zero_offset, s * velocity / g, s * torque * g
+
+
+def joint_to_motor(j: JointConfig, q: float, dq: float, tau: float) -> tuple[float, float, float]:
+    """Joint side -> motor side, the inverse of `motor_to_joint`: q_m = s (q - offset) g, dq_m = s dq g, tau_m = s tau / g."""
+    g, s = j.gear_ratio, j.direction
+    return s * (q - j.zero_offset) * g, s * dq * g, s * tau / g
 
 
 @dataclass(frozen=True)

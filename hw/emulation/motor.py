@@ -11,8 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from hw.emulation.plant import Plant
-from hw.hardware_robot import motor_to_joint
-from hw.jointmap import JointConfig
+from hw.jointmap import JointConfig, joint_to_motor, motor_to_joint
 from hw.protocols.command import MotorCommand
 
 AMBIENT_C = 30.0
@@ -72,11 +71,8 @@ class EmulatedMotor:
 
     def reading(self, plant: Plant) -> tuple[float, float, float]:
         """Motor-side position (relative to the encoder zero), velocity and torque."""
-        q, dq, tau = plant.joint_state(self.joint_name)
-        j = self.joint
-        s, g = j.direction, j.gear_ratio
-        torque = self.stalled_torque if self.stalled_torque is not None else s * tau / g
-        return s * (q - j.zero_offset) * g - self.encoder_zero, s * dq * g, torque
+        position, velocity, torque = joint_to_motor(self.joint, *plant.joint_state(self.joint_name))
+        return position - self.encoder_zero, velocity, self.stalled_torque if self.stalled_torque is not None else torque
 
     def set_zero(self, plant: Plant) -> None:
         position, _, _ = self.reading(plant)

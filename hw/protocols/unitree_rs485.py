@@ -7,7 +7,7 @@ truncated toward zero after clamping to its field's range; CRC-16/KERMIT over by
 in bytes 15-16. Reply, 16 bytes: header FD EE, id/mode byte, torque, speed, position with
 the same scales, int8 temperature, uint16 whose bits 0-2 are the error code, CRC over
 bytes 0-13 in bytes 14-15. All quantities are on the rotor side; the joint map's gear ratio
-converts (`hw.hardware_robot.motor_to_joint` and its inverse).
+converts (`hw.jointmap.motor_to_joint` and its inverse).
 """
 
 from __future__ import annotations

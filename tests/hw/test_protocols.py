@@ -131,8 +131,7 @@ def test_rs485_bad_crc_length_and_header() -> None:
 
 
 def test_gear_ratio_and_direction_conversions() -> None:
-    from hw.hardware_robot import motor_to_joint
-    from hw.jointmap import JointConfig
+    from hw.jointmap import JointConfig, joint_to_motor, motor_to_joint
 
     joint = JointConfig(
         bus="b",
@@ -147,6 +146,7 @@ def test_gear_ratio_and_direction_conversions() -> None:
     )
     q, dq, tau = motor_to_joint(joint, -6.33, 12.66, 1.0)
     assert (q, dq, tau) == pytest.approx((1.2, -2.0, -6.33))
+    assert joint_to_motor(joint, q, dq, tau) == pytest.approx((-6.33, 12.66, 1.0))
 
 
 def test_frame_splitter_resyncs_after_garbage() -> None:
