@@ -40,5 +40,9 @@ class HardwareFault(G1Error, RuntimeError):
     """A latched safety fault: the robot is damped until an explicit re-arm."""
 
 
+class EmulatorError(G1Error, RuntimeError):
+    """A firmware emulator of simulated hardware died: its bus no longer answers like the motors would."""
+
+
 class LifecycleError(G1Error, RuntimeError):
     """A lifecycle transition that is not allowed from the current state."""

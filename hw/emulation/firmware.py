@@ -10,6 +10,7 @@ the next replies carry.
 
 from __future__ import annotations
 
+import logging
 import os
 import select
 import threading
@@ -30,9 +31,12 @@ CUBEMARS_OVER_TEMPERATURE = 1
 DAMIAO_COIL_OVER_TEMPERATURE = 0xC
 RS485_OVERHEAT = 1
 
+log = logging.getLogger(__name__)
+
 
 class _Emulator:
-    """A background thread answering frames until `close()`."""
+    """A background thread answering frames until `close()`. If it dies, `error` holds why
+    (and the log has the traceback): `SimulatedHardware.step()` raises it into the run."""
 
     def __init__(self, name: str, plant: Plant, faults: FaultPlan | None) -> None:
         self.name = name
@@ -40,12 +44,20 @@ class _Emulator:
         self.faults = faults or FaultPlan()
         self.frames_in = 0
         self.frames_out = 0
+        self.error: Exception | None = None
         self._running = True
-        self._thread = threading.Thread(target=self._serve, name=f"emulator-{name}", daemon=True)
+        self._thread = threading.Thread(target=self._run, name=f"emulator-{name}", daemon=True)
 
     def start(self) -> None:
         self.sample()  # a first status before answering anything
         self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            self._serve()
+        except Exception as exc:  # the thread ends here: keep the cause for the run to raise
+            self.error = exc
+            log.error("firmware emulator '%s' died: %s: %s", self.name, type(exc).__name__, exc, exc_info=exc)
 
     def _serve(self) -> None:
         raise NotImplementedError

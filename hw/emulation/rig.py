@@ -19,7 +19,7 @@ from hw.emulation.faults import FaultPlan
 from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
-from hw.errors import ConfigError
+from hw.errors import ConfigError, EmulatorError
 from hw.jointmap import BusConfig, HardwareConfig, load_motor_models
 from hw.protocols.mit import MitRanges, ReplyVariant
 
@@ -70,7 +70,15 @@ class SimulatedHardware:
             emulator.start()
 
     def step(self) -> None:
-        """One physics step: the motors' control step, physics, then fresh status and IMU frames."""
+        """One physics step: the motors' control step, physics, then fresh status and IMU frames.
+        Raises `EmulatorError` once an emulator's thread died: its motors would only go silent."""
+        for emulator in self.emulators:
+            if emulator.error is not None:
+                exc = emulator.error
+                raise EmulatorError(
+                    f"the firmware emulator of bus '{emulator.name}' died: {type(exc).__name__}: {exc}; "
+                    "its motors no longer answer, so the run stops (the log has the traceback)"
+                ) from exc
         for emulator in self.emulators:
             emulator.tick()
         step = getattr(self.plant, "step", None)

@@ -1,0 +1,51 @@
+"""Simulated hardware never fails silently: an emulator whose thread dies stops the run, naming why."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+
+import can
+import pytest
+
+from hw import g1
+from hw.emulation.plant import StaticPlant
+from hw.emulation.rig import SimulatedHardware
+from hw.errors import EmulatorError
+from hw.jointmap import load_hardware_config
+from hw.protocols import mit
+
+
+class ThreadFailingPlant(StaticPlant):
+    """Fails where an emulator's receive thread reads it, as a bug in that thread would;
+    the control step, run from the caller's thread, still works."""
+
+    def joint_state(self, joint: str) -> tuple[float, float, float]:
+        if threading.current_thread() is not threading.main_thread():
+            raise RuntimeError("encoder read failed")
+        return super().joint_state(joint)
+
+
+def test_an_emulator_thread_that_dies_makes_the_next_step_raise_naming_the_cause(caplog: pytest.LogCaptureFixture) -> None:
+    plant = ThreadFailingPlant(dict.fromkeys(g1.JOINT_NAMES, 0.0))
+    with SimulatedHardware(load_hardware_config("sim-can"), plant) as twin:
+        twin.step()
+        emulator = next(e for e in twin.emulators if e.name == "can0")
+        host = can.Bus(interface="virtual", channel=twin.host_config.buses["can0"].channel)
+        try:
+            with caplog.at_level(logging.ERROR, logger="hw.emulation.firmware"):
+                # Entering motor mode makes the receive thread sample the motor: the plant raises there.
+                host.send(can.Message(arbitration_id=1, data=mit.ENTER_MOTOR_MODE, is_extended_id=False))
+                deadline = time.monotonic() + 2.0
+                while emulator.error is None and time.monotonic() < deadline:
+                    time.sleep(0.005)
+        finally:
+            host.shutdown()
+        assert isinstance(emulator.error, RuntimeError)
+        assert "firmware emulator 'can0' died: RuntimeError: encoder read failed" in caplog.text
+        with pytest.raises(EmulatorError, match=r"emulator of bus 'can0' died: RuntimeError: encoder read failed") as caught:
+            twin.step()
+        assert caught.value.__cause__ is emulator.error
+        with pytest.raises(EmulatorError):
+            twin.step()  # and every step after it: the bus stays dead
