@@ -3,11 +3,16 @@
 Decoding (`GamepadDecoder.feed`) and mapping (`map_gamepad`) are pure and tested on
 recorded event streams; `GamepadSource` only reads events from `/dev/input/event*`.
 An unplugged gamepad, or one that stops reporting while a stick is deflected, is not
-alive: the run loop then commands zero and damps the robot.
+alive: the run loop then commands zero and damps the robot. A read that fails otherwise
+is logged and counted (`read_errors`); after a few in a row the reader gives up and the
+gamepad is not alive either.
 """
 
 from __future__ import annotations
 
+import errno
+import logging
+import select
 import threading
 import time
 from dataclasses import dataclass, field
@@ -16,9 +21,15 @@ from typing import Any
 from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
 from hw.errors import InputDeviceError
 
+log = logging.getLogger(__name__)
+
 EV_SYN, EV_KEY, EV_ABS = 0, 1, 3
 BTN_SOUTH, BTN_EAST, BTN_SELECT, BTN_START = 304, 305, 314, 315
 ABS_X, ABS_Y, ABS_RX = 0, 1, 3
+
+READ_POLL_S = 0.05  # the reader waits for events this long at a time, then looks whether it should stop
+MAX_CONSECUTIVE_READ_ERRORS = 3  # failed reads in a row before the reader gives up (the pad is then not alive)
+JOIN_TIMEOUT_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -133,16 +144,21 @@ def find_gamepad(evdev: Any) -> Any:
 
 
 class GamepadSource(CommandSource):
-    """Reads a gamepad with evdev in a background thread."""
+    """Reads a gamepad with evdev in a background thread, joined on `close()`.
+
+    `device`: an already opened evdev-like device (`fileno`, `read`, `capabilities`, `close`),
+    e.g. a fake in tests; by default the one at `device_path`, or the first gamepad found."""
 
     _needs_close = True
 
-    def __init__(self, cfg: GamepadConfig, limits: CommandLimits, device_path: str | None = None) -> None:
-        try:
-            import evdev  # noqa: PLC0415 - optional at import time: only this source needs it
-        except ImportError as exc:
-            raise InputDeviceError("the gamepad input needs the 'evdev' package (Linux); install it with 'pip install evdev'") from exc
-        self._device = evdev.InputDevice(device_path) if device_path else find_gamepad(evdev)
+    def __init__(self, cfg: GamepadConfig, limits: CommandLimits, device_path: str | None = None, device: Any = None) -> None:
+        if device is None:
+            try:
+                import evdev  # noqa: PLC0415 - optional at import time: only this source needs it
+            except ImportError as exc:
+                raise InputDeviceError("the gamepad input needs the 'evdev' package (Linux); install it with 'pip install evdev'") from exc
+            device = evdev.InputDevice(device_path) if device_path else find_gamepad(evdev)
+        self._device = device
         abs_caps: Any = self._device.capabilities(absinfo=True).get(EV_ABS, [])
         ranges = {code: AxisRange(info.min, info.max) for code, info in abs_caps}
         self._decoder = GamepadDecoder(ranges)
@@ -150,18 +166,41 @@ class GamepadSource(CommandSource):
         self._limits = limits
         self._lock = threading.Lock()
         self._connected = True
+        self._stop = threading.Event()
+        self.read_errors = 0  # failed reads other than an unplug, each logged
         self._thread = threading.Thread(target=self._read_events, name="gamepad", daemon=True)
         self._thread.start()
 
     def _read_events(self) -> None:
+        failures = 0
         try:
-            for event in self._device.read_loop():
-                with self._lock:
-                    self._decoder.feed(time.monotonic(), event.type, event.code, event.value)
-        except OSError:  # unplugged: ENODEV
-            pass
+            while not self._stop.is_set() and failures < MAX_CONSECUTIVE_READ_ERRORS:
+                try:
+                    ready, _, _ = select.select([self._device], [], [], READ_POLL_S)
+                    if ready:
+                        for event in self._device.read():
+                            with self._lock:
+                                self._decoder.feed(time.monotonic(), event.type, event.code, event.value)
+                except BlockingIOError:  # woken without a whole event: wait again
+                    continue
+                except OSError as exc:
+                    if exc.errno == errno.ENODEV:
+                        log.warning("gamepad unplugged (%s): commanding zero", exc)
+                        return
+                    failures = self._read_failed(exc, failures)
+                except Exception as exc:  # a bad event or a driver bug: never silent
+                    failures = self._read_failed(exc, failures)
+                else:
+                    failures = 0
+            if failures:
+                log.error("gamepad reader gives up after %d failed reads in a row: commanding zero", failures)
         finally:
             self._connected = False
+
+    def _read_failed(self, exc: BaseException, failures: int) -> int:
+        self.read_errors += 1
+        log.error("gamepad read failed (%d in a row): %s", failures + 1, exc, exc_info=exc)
+        return failures + 1
 
     def poll(self, now: float) -> CommandSample:
         with self._lock:
@@ -169,7 +208,12 @@ class GamepadSource(CommandSource):
         return map_gamepad(state, self._cfg, self._limits, time.monotonic(), connected=self._connected)
 
     def close(self) -> None:
+        """Stop the reader, wait for it (it looks at its stop flag every `READ_POLL_S`), close the device."""
         if self._closed:
             return
+        self._stop.set()
+        self._thread.join(timeout=JOIN_TIMEOUT_S)
         self._device.close()
+        if self._thread.is_alive():
+            log.warning("the gamepad reader did not stop within %.1f s of close()", JOIN_TIMEOUT_S)
         super().close()

@@ -1,11 +1,16 @@
 """Terminal keyboard driving: W/S forward/back, A/D left/right, Q/E turn, space zero.
 
 Enter = start, X = stop (zero and stand), Esc or K = emergency stop (damping).
-Key handling is the pure `apply_key`; `KeyboardSource` reads raw keys from a TTY.
+Key handling is the pure `apply_key`; `KeyboardSource` reads raw keys from a TTY. A
+closed terminal makes the keyboard not alive (the run loop then commands zero and damps);
+a read that fails otherwise is logged and counted (`read_errors`), and after a few in a
+row the reader gives up.
 """
 
 from __future__ import annotations
 
+import errno
+import logging
 import os
 import select
 import sys
@@ -16,6 +21,12 @@ from dataclasses import dataclass, field, replace
 
 from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
 from hw.errors import InputDeviceError
+
+log = logging.getLogger(__name__)
+
+READ_POLL_S = 0.05  # the reader waits for a key this long at a time, then looks whether it should stop
+MAX_CONSECUTIVE_READ_ERRORS = 3
+JOIN_TIMEOUT_S = 1.0
 
 HELP = "keys: W/S fwd/back  A/D left/right  Q/E turn  space zero  Enter start  X stop  Esc/K e-stop"
 
@@ -47,7 +58,8 @@ def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float
 
 
 class KeyboardSource(CommandSource):
-    """Reads keys from the controlling terminal in a background thread."""
+    """Reads keys from the controlling terminal (or `stream`, a TTY) in a background thread,
+    joined on `close()`, which also restores the terminal's mode."""
 
     _needs_close = True
 
@@ -57,20 +69,42 @@ class KeyboardSource(CommandSource):
         self._step = step
         self._state = KeyboardState()
         self._lock = threading.Lock()
+        self.read_errors = 0  # failed reads other than a closed terminal, each logged
         self._saved = termios.tcgetattr(self._fd)
         tty.setcbreak(self._fd)
-        self._running = True
+        self._stop = threading.Event()
         self._thread = threading.Thread(target=self._read_keys, name="keyboard", daemon=True)
         self._thread.start()
 
     def _read_keys(self) -> None:
-        while self._running:
-            ready, _, _ = select.select([self._fd], [], [], 0.05)
-            if not ready:
-                continue
-            key = os.read(self._fd, 1).decode(errors="ignore")
-            with self._lock:
-                self._state = apply_key(self._state, key, self._limits, self._step)
+        failures = 0
+        while not self._stop.is_set() and failures < MAX_CONSECUTIVE_READ_ERRORS:
+            try:
+                ready, _, _ = select.select([self._fd], [], [], READ_POLL_S)
+                if not ready:
+                    continue
+                data = os.read(self._fd, 1)
+                if not data:
+                    log.warning("the terminal closed: no more keys, commanding zero")
+                    return
+                with self._lock:
+                    self._state = apply_key(self._state, data.decode(errors="ignore"), self._limits, self._step)
+            except OSError as exc:
+                if exc.errno == errno.EIO:  # the terminal hung up
+                    log.warning("the terminal closed (%s): no more keys, commanding zero", exc)
+                    return
+                failures = self._read_failed(exc, failures)
+            except Exception as exc:  # never silent
+                failures = self._read_failed(exc, failures)
+            else:
+                failures = 0
+        if failures:
+            log.error("keyboard reader gives up after %d failed reads in a row: commanding zero", failures)
+
+    def _read_failed(self, exc: BaseException, failures: int) -> int:
+        self.read_errors += 1
+        log.error("keyboard read failed (%d in a row): %s", failures + 1, exc, exc_info=exc)
+        return failures + 1
 
     def poll(self, now: float) -> CommandSample:
         with self._lock:
@@ -79,11 +113,17 @@ class KeyboardSource(CommandSource):
         return CommandSample(velocity=state.velocity, buttons=state.buttons, alive=self._thread.is_alive())
 
     def close(self) -> None:
+        """Stop the reader, wait for it (it looks at its stop flag every `READ_POLL_S`), restore the terminal."""
         if self._closed:
             return
-        self._running = False
-        self._thread.join(timeout=0.5)
-        termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
+        self._stop.set()
+        self._thread.join(timeout=JOIN_TIMEOUT_S)
+        if self._thread.is_alive():
+            log.warning("the keyboard reader did not stop within %.1f s of close()", JOIN_TIMEOUT_S)
+        try:
+            termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
+        except termios.error as exc:  # a terminal that hung up cannot be restored, nor needs to be
+            log.warning("could not restore the terminal's mode: %s", exc)
         super().close()
 
 
