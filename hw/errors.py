@@ -46,3 +46,7 @@ class EmulatorError(G1Error, RuntimeError):
 
 class LifecycleError(G1Error, RuntimeError):
     """A lifecycle transition that is not allowed from the current state."""
+
+
+class RunAborted(G1Error, RuntimeError):
+    """An exception ended a run after it started; its report was written first."""

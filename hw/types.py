@@ -29,15 +29,33 @@ class RobotState:
     base_lin_vel: FloatArray
 
 
+def read_only(values: FloatArray) -> FloatArray:
+    """`values` as a read-only float array: itself when it already is one, else a read-only copy."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.flags.writeable:
+        array = array.copy()
+        array.flags.writeable = False
+    return array
+
+
 @dataclass(frozen=True)
 class JointCommand:
-    """Per-joint PD command: tau = kp * (q - q_meas) + kd * (dq - dq_meas) + tau_ff."""
+    """Per-joint PD command: tau = kp * (q - q_meas) + kd * (dq - dq_meas) + tau_ff.
+
+    Its arrays are read-only (writable inputs are copied): the hardware layer re-sends an
+    unchanged command by identity, so an array changed in place after writing would
+    otherwise go out stale. Producers that reuse arrays pass read-only ones (no copy).
+    """
 
     q: FloatArray
     dq: FloatArray
     kp: FloatArray
     kd: FloatArray
     tau_ff: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("q", "dq", "kp", "kd", "tau_ff"):
+            object.__setattr__(self, name, read_only(getattr(self, name)))
 
     @staticmethod
     def damping(n: int, kd: float | FloatArray) -> JointCommand:

@@ -14,7 +14,7 @@ import json
 from pathlib import Path
 
 
-def add_dataset_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     dataset = sub.add_parser("dataset", help="record, import and inspect motion datasets for the planner")
     dataset_sub = dataset.add_subparsers(dest="dataset_command", required=True)
 
@@ -34,7 +34,7 @@ def add_dataset_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser])
     info.add_argument("path", type=Path, help="dataset folder or its manifest.json")
 
 
-def run_dataset(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     if args.dataset_command == "info":
         from controller.motion_data.dataset import dataset_summary  # noqa: PLC0415
 

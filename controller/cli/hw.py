@@ -20,12 +20,13 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from hw.errors import ConfigError
+from hw.g1 import CONTROL_CYCLE_HZ
 
 if TYPE_CHECKING:
     from hw.hardware_robot import HardwareRobot
 
 
-def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     hw = sub.add_parser("hw", help="bench bring-up on real or simulated hardware")
     hw_sub = hw.add_subparsers(dest="hw_command", required=True)
 
@@ -68,7 +69,7 @@ def add_hw_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     dec.add_argument("--reply", default=None, choices=("basic", "cubemars", "damiao"), help="MIT: decode as this reply variant")
 
 
-def run_hw(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     if args.hw_command == "frame":
         return _frame(args)
     from controller.runtime.hardware import open_hardware  # noqa: PLC0415
@@ -113,7 +114,7 @@ def _monitor(host: HardwareRobot, pump: Callable[[], None], seconds: float, refr
     from hw import bringup  # noqa: PLC0415
 
     tty = sys.stdout.isatty()
-    cycles = max(int(refresh * 500), 1)
+    cycles = max(int(refresh * CONTROL_CYCLE_HZ), 1)
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         for _ in range(cycles):

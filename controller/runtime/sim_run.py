@@ -1,11 +1,15 @@
-"""`g1ctl sim`: run a command scenario on the simulated G1 and report how well it tracked.
+"""`g1ctl sim`: build a run on the simulated G1, tick it to the end, report on every exit path.
 
+Build: the MuJoCo G1, a tracker chosen by name, a backend (MuJoCo directly, or simulated
+hardware), the command input. Run: the session's tick at the tracker's rate on simulated
+time (as fast as it goes, or held to the wall clock). Report: whatever ended the run (the
+end of the scenario, a fault, a fall on hardware, Ctrl-C, an exception), the JSON report
+and its plot are written; an exception is re-raised as `RunAborted` once they are.
 This module imports MuJoCo (through `sim`); hardware runs never import it.
 """
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from contextlib import ExitStack
@@ -16,26 +20,26 @@ from typing import Any
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
-from controller.inputs.base import CommandLimits, CommandSource
-from controller.inputs.scripted import ScriptedSource, load_scenario, timeline
+from controller.inputs.registry import check_input, open_input
+from controller.inputs.scripted import load_scenario
+from controller.reports import write_report
+from controller.runtime.backend import Backend
 from controller.runtime.loop import RateLoop, RealtimeSimulationClock, SimulationClock
-from controller.runtime.tracking_metrics import TrackingMetrics, percentiles_ms
 from controller.runtime.plots import plot_tracking
-from controller.tracking.presets import load_policy
-from controller.runtime.sim_backends import DirectBackend, HardwareBackend
-from controller.runtime.supervisor import Mode, Supervisor
-from hw.errors import ConfigError
+from controller.runtime.session import Session
+from controller.runtime.sim_backends import DirectSimBackend, SimulatedHardwareBackend
+from controller.tracking.registry import TrackerSpec, make_tracker
+from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_hardware_config
 from sim.robot import SimRobot
 from sim.world import build_model
-
-INPUTS = ("scripted", "keyboard", "gamepad")
 
 
 @dataclass(frozen=True)
 class SimRunConfig:
     scenario: str = "walk_turn_stop"
     policy: str = "fastsac"
+    tracker: str = "velocity"
     duration: float | None = None  # None: the scenario's duration
     seed: int = 0
     input: str = "scripted"
@@ -52,133 +56,106 @@ class SimRunConfig:
     picture: Path | None = None  # PNG of the final frame
 
 
-def make_source(cfg: SimRunConfig, limits: CommandLimits, duration: float) -> CommandSource:
-    """The command source of the run: a scenario's timeline, the keyboard or a gamepad."""
-    if cfg.input == "scripted":
-        return ScriptedSource(timeline(load_scenario(cfg.scenario), duration, limits, cfg.seed), limits)
-    if cfg.input == "keyboard":
-        from controller.inputs.keyboard import HELP, KeyboardSource  # noqa: PLC0415
-
-        print(HELP, file=sys.stderr)
-        return KeyboardSource(limits)
-    if cfg.input == "gamepad":
-        from controller.inputs.gamepad import GamepadConfig, GamepadSource  # noqa: PLC0415
-
-        return GamepadSource(GamepadConfig(), limits)
-    raise ConfigError(f"unknown input '{cfg.input}' (valid: {', '.join(INPUTS)})")
-
-
-def run(cfg: SimRunConfig) -> dict[str, Any]:
-    """Run the scenario and return the report (also written to `cfg.report` when set)."""
+def _check(cfg: SimRunConfig) -> float | None:
+    """Input mistakes, found before anything starts; returns the run's duration (None: until stopped)."""
+    check_input(cfg.input)
     scenario = load_scenario(cfg.scenario) if cfg.input == "scripted" else None
-    assets = ensure_assets(cfg.assets_dir)
-    robot = SimRobot(build_model(assets.g1_mjcf))
-    policy = load_policy(cfg.policy, assets, robot.joint_names)
     if cfg.hardware is not None:
-        load_hardware_config(cfg.hardware)  # a bad config is a user error before anything starts
+        load_hardware_config(cfg.hardware)
     elif cfg.faults is not None:
         raise ConfigError("--faults needs --hardware: faults are injected into simulated hardware")
-    interactive = cfg.input != "scripted"
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
     if duration is not None and duration <= 0:
         raise ConfigError(f"--duration must be positive, got {duration}")
-    realtime = cfg.realtime or interactive or cfg.viewer
-    backend: DirectBackend | HardwareBackend = (
-        DirectBackend(robot) if cfg.hardware is None else HardwareBackend(robot, cfg.hardware, cfg.faults)
-    )
-    clock = (RealtimeSimulationClock if realtime else SimulationClock)(lambda: robot.time, backend.advance_to)
-    loop = RateLoop(clock, policy.cfg.rate_hz)
-    controlled = backend.robot
-    supervisor = Supervisor()
-    metrics = TrackingMetrics()
-    step_times: list[float] = []
-    falls: list[float] = []
-    recorder = None
-    interrupted = False
+    return duration
 
+
+def run(cfg: SimRunConfig) -> dict[str, Any]:
+    """Run the scenario and return the report (also written to `cfg.report` when set).
+
+    Raises `RunAborted` (after writing the report) when an exception ended the run.
+    """
+    duration = _check(cfg)
+    assets = ensure_assets(cfg.assets_dir)
     with ExitStack() as stack:
+        robot = SimRobot(build_model(assets.g1_mjcf))
+        stack.callback(robot.close)
+        tracker = make_tracker(cfg.tracker, TrackerSpec(cfg.policy, assets, robot.joint_names))
+        backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
         stack.callback(backend.close)
-        source = make_source(cfg, policy.command_limits, duration or 0.0)
-        stack.enter_context(source)
+        source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
+        session = Session(backend, tracker, source)
+        realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer
+        clock = (RealtimeSimulationClock if realtime else SimulationClock)(backend.now, backend.advance_to)
+        loop = RateLoop(clock, tracker.rate_hz)
+        recorder = viewer = None
         if cfg.video is not None:
             from sim.render import VideoRecorder  # noqa: PLC0415 - rendering is optional
 
             recorder = stack.enter_context(VideoRecorder(robot.model, cfg.video, fps=cfg.video_fps))
-        viewer = _open_viewer(robot, stack) if cfg.viewer else None
-        total = round(duration * policy.cfg.rate_hz) if duration else None
+        if cfg.viewer:
+            viewer = _open_viewer(robot, stack)
+        total = round(duration * tracker.rate_hz) if duration else None
         bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
+        interrupted, error = False, None
         wall_start = time.perf_counter()
-        sim_start = robot.time
         try:
+            backend.start()
             for tick in loop.run(duration):
-                truth = robot.read() if controlled is not robot else None
-                state = controlled.read()
-                sample = source.poll(state.time)
-                velocity = supervisor.update(sample, policy.latched_fault or backend.fault())
-                measured = truth or state  # metrics use the simulator's ground truth
-                metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
-                t0 = time.perf_counter()
-                command = policy.damping_command() if supervisor.mode is Mode.DAMP else policy.step(state, velocity)
-                step_times.append(time.perf_counter() - t0)
-                controlled.write(command)
+                going_on = session.tick()
                 if recorder is not None:
                     recorder.maybe_capture(robot.data)
                 if viewer is not None:
                     viewer.sync()
-                if robot.has_fallen():
-                    falls.append(round(state.time - sim_start, 3))
-                    if supervisor.mode is Mode.DAMP or not backend.recover_from_fall():
-                        break  # damped on purpose, or on hardware: nothing left to run
-                    policy.reset()
-                    metrics.reset_reference()
                 if tick % 10 == 9:
                     bar.update(10)
+                if not going_on:
+                    break
+        except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
+            session.fail(str(exc))
         except KeyboardInterrupt:
             interrupted = True
+        except Exception as exc:  # reported, then raised again: the run fails loudly
+            error = exc
         wall = time.perf_counter() - wall_start
-        sim_seconds = robot.time - sim_start
-        final_pos = robot.read().base_pos
+        report = _report(cfg, session, robot, loop, wall, interrupted, error)
         if cfg.picture is not None:
             from sim.render import render_picture  # noqa: PLC0415 - rendering is optional
 
             render_picture(robot.model, robot.data, cfg.picture)
+            report["picture"] = str(cfg.picture)
+        if recorder is not None:
+            report["video"] = str(cfg.video)
+    _write_outputs(cfg, session, report)
+    if error is not None:
+        where = f"; report: {cfg.report}" if cfg.report else ""
+        raise RunAborted(f"run aborted after {report['sim_seconds']} s: {error}{where}") from error
+    return report
 
-    report: dict[str, Any] = {
-        "scenario": cfg.scenario if scenario else cfg.input,
-        "policy": cfg.policy,
-        "seed": cfg.seed,
-        "sim_seconds": round(sim_seconds, 4),
-        "wall_seconds": round(wall, 4),
-        "real_time_factor": round(sim_seconds / wall, 3) if wall > 0 else None,
-        "falls": len(falls),
-        "fall_times": falls,
-        "velocity_error_mean": round(metrics.velocity_error_mean, 4),
-        "yaw_rate_error_mean": round(metrics.yaw_rate_error_mean, 4),
-        "policy_step_ms": percentiles_ms(step_times),
-        "overruns": loop.overruns,
-        "nonfinite_actions": policy.nonfinite_events,
-        "final_mode": supervisor.mode.value,
-        "damp_reason": supervisor.damp_reason,
-        "estops": supervisor.estops,
-        "input_losses": supervisor.input_losses,
-        "final_base_position": [round(float(v), 4) for v in final_pos],
-        "interrupted": interrupted,
-    }
-    hw_report = backend.report()
-    if hw_report is not None:
-        report["hw"] = hw_report
-    if recorder is not None:
-        report["video"] = str(cfg.video)
-    if cfg.picture is not None:
-        report["picture"] = str(cfg.picture)
+
+def _report(
+    cfg: SimRunConfig, session: Session, robot: SimRobot, loop: RateLoop, wall: float, interrupted: bool, error: BaseException | None
+) -> dict[str, Any]:
+    report: dict[str, Any] = {"scenario": cfg.scenario if cfg.input == "scripted" else cfg.input, "policy": cfg.policy, "seed": cfg.seed}
+    report |= session.report()
+    report["wall_seconds"] = round(wall, 4)
+    report["real_time_factor"] = round(report["sim_seconds"] / wall, 3) if wall > 0 else None
+    report["overruns"] = loop.overruns
+    report["final_base_position"] = [round(float(v), 4) for v in robot.read().base_pos]
+    report["interrupted"] = interrupted
+    if error is not None:
+        report["error"] = f"{type(error).__name__}: {error}"
+    return report
+
+
+def _write_outputs(cfg: SimRunConfig, session: Session, report: dict[str, Any]) -> None:
     plot_path = cfg.plot or (cfg.report.with_suffix(".png") if cfg.report else None)
-    if plot_path is not None and metrics.times:
-        plot_tracking(metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured")
+    if plot_path is not None:  # also after a fault or an error: what was tracked until then
+        ended = f" (ended damped: {report['damp_reason']})" if session.ended_in_fault else ""
+        plot_tracking(session.metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured{ended}")
         report["plot"] = str(plot_path)
     if cfg.report is not None:
-        cfg.report.parent.mkdir(parents=True, exist_ok=True)
-        cfg.report.write_text(json.dumps(report, indent=2) + "\n")
-    return report
+        write_report(report, cfg.report)
 
 
 def _open_viewer(robot: SimRobot, stack: ExitStack) -> Any:

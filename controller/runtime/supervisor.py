@@ -30,22 +30,23 @@ class Supervisor:
     def update(self, sample: CommandSample, fault: str | None) -> VelocityCommand:
         """Advance the mode on this input sample; returns the velocity the policy should track."""
         if fault is not None:
-            self._damp(f"fault: {fault}")
+            self.damp(f"fault: {fault}")
         elif sample.buttons.estop:
             if self.mode is not Mode.DAMP:
                 self.estops += 1
-            self._damp("emergency stop pressed")
+            self.damp("emergency stop pressed")
         elif not sample.alive:
             if self.mode is not Mode.DAMP:
                 self.input_losses += 1
-            self._damp("command input lost (stale or unplugged)")
+            self.damp("command input lost (stale or unplugged)")
         elif sample.buttons.start:
             self.mode, self.damp_reason = Mode.RUN, ""
         elif sample.buttons.stop and self.mode is Mode.RUN:
             self.mode = Mode.STAND
         return sample.velocity if self.mode is Mode.RUN else ZERO
 
-    def _damp(self, reason: str) -> None:
+    def damp(self, reason: str) -> None:
+        """Enter damping for `reason` (kept when already damping: the first cause is the one to fix)."""
         if self.mode is not Mode.DAMP:
             self.damp_reason = reason
         self.mode = Mode.DAMP

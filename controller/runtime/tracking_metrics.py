@@ -14,16 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.inputs.base import VelocityCommand
+from hw import quat
 from hw.types import FloatArray
-
-
-def yaw_of(q_wxyz: FloatArray) -> float:
-    w, x, y, z = q_wxyz.tolist()
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-def wrap_angle(a: float) -> float:
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass
@@ -43,7 +35,7 @@ class TrackingMetrics:
         self._prev = None
 
     def record(self, t: float, base_pos: FloatArray, base_quat: FloatArray, command: VelocityCommand) -> None:
-        yaw = yaw_of(base_quat)
+        yaw = float(quat.heading(base_quat))
         if command != self._last_command:
             self._last_command = command
             self._changed_at = t
@@ -55,7 +47,7 @@ class TrackingMetrics:
         wx, wy = (px - prev[1]) / dt, (py - prev[2]) / dt
         c, s = math.cos(yaw), math.sin(yaw)
         vx, vy = c * wx + s * wy, -s * wx + c * wy
-        wz = wrap_angle(yaw - prev[3]) / dt
+        wz = float(quat.wrap_angle(yaw - prev[3])) / dt
         self.times.append(t)
         self.commanded.append((command.vx, command.vy, command.yaw_rate))
         self.measured.append((vx, vy, wz))
@@ -70,10 +62,3 @@ class TrackingMetrics:
     @property
     def yaw_rate_error_mean(self) -> float:
         return float(np.mean(self._yaw_errors)) if self._yaw_errors else float("nan")
-
-
-def percentiles_ms(samples_s: list[float]) -> dict[str, float]:
-    if not samples_s:
-        return {"p50": float("nan"), "p99": float("nan")}
-    arr = np.asarray(samples_s) * 1e3
-    return {"p50": round(float(np.percentile(arr, 50)), 4), "p99": round(float(np.percentile(arr, 99)), 4)}

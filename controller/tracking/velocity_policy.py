@@ -1,4 +1,4 @@
-"""ONNX locomotion policy runner: robot state + velocity command -> joint PD command at 50 Hz.
+"""The velocity tracker: an ONNX locomotion policy, robot state + velocity command -> joint PD command at 50 Hz.
 
 The ONNX file describes itself: joint names, kp and kd (and, where present, the action
 scale and command ranges) live in its metadata as JSON values. The YAML config declares
@@ -14,12 +14,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import onnxruntime as ort
 
 from controller.inputs.base import CommandLimits, VelocityCommand
+from controller.onnx_session import open_session
+from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
+from controller.tracking.tracker import Tracker
+from hw import quat
 from hw.errors import ConfigError, PolicyError
-from hw.types import FloatArray, JointCommand, RobotState
+from hw.g1 import DAMPING_KD
+from hw.types import FloatArray, JointCommand, RobotState, read_only
 
 GRAVITY = np.array([0.0, 0.0, -1.0])
 
@@ -45,28 +49,8 @@ class PolicyConfig:
     gait: GaitConfig = field(default_factory=GaitConfig)
     kp: dict[str, float] | None = None  # per-joint overrides of the metadata gains
     kd: dict[str, float] | None = None
-    damping_kd: float = 2.0
+    damping_kd: float = DAMPING_KD
     max_consecutive_nonfinite: int = 3  # this many bad outputs in a row latch damping
-
-
-def quat_rotate_inverse(q_wxyz: FloatArray, v: FloatArray) -> FloatArray:
-    """Rotate world vector `v` into the frame of unit quaternion `q` (w, x, y, z).
-
-    Written on scalars: it runs every control tick and numpy's small-array overhead
-    would cost more than the arithmetic.
-    """
-    w, x, y, z = q_wxyz.tolist()
-    vx, vy, vz = v.tolist()
-    k = 2.0 * w * w - 1.0
-    dot2 = 2.0 * (x * vx + y * vy + z * vz)
-    w2 = 2.0 * w
-    return np.array(
-        (
-            vx * k - (y * vz - z * vy) * w2 + x * dot2,
-            vy * k - (z * vx - x * vz) * w2 + y * dot2,
-            vz * k - (x * vy - y * vx) * w2 + z * dot2,
-        )
-    )
 
 
 class GaitClock:
@@ -92,26 +76,18 @@ class GaitClock:
             self.standing = False
 
 
-def _open_session(path: Path) -> ort.InferenceSession:
-    if not path.is_file():
-        raise PolicyError(f"policy file not found: {path}; run 'g1ctl assets fetch' or pass a valid path")
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = 1
-    options.inter_op_num_threads = 1
-    options.log_severity_level = 3
-    try:
-        return ort.InferenceSession(str(path), sess_options=options, providers=["CPUExecutionProvider"])
-    except Exception as exc:  # onnxruntime raises its own Fail/InvalidGraph types
-        raise PolicyError(f"cannot load ONNX policy {path}: {exc}".splitlines()[0]) from exc
+class VelocityPolicy(Tracker):
+    """The velocity-command locomotion policy as a tracker: follows the reference window's base velocity."""
 
-
-class OnnxPolicy:
-    """Locomotion policy: `step(state, command)` returns the joint command for this tick."""
+    name = "velocity"
 
     def __init__(self, path: Path, cfg: PolicyConfig, robot_joint_names: tuple[str, ...], source: str = "policy config") -> None:
         self.cfg = cfg
         self.path = path
-        self._session = _open_session(path)
+        self.rate_hz = cfg.rate_hz
+        if not path.is_file():
+            raise PolicyError(f"policy file not found: {path}; run 'g1ctl assets fetch' or pass a valid path")
+        self._session = open_session(path, PolicyError, "ONNX policy")
         meta = {k: _json_or_text(v) for k, v in self._session.get_modelmeta().custom_metadata_map.items()}
         self.joint_names = _metadata_joint_names(meta, path)
         n = len(self.joint_names)
@@ -126,9 +102,10 @@ class OnnxPolicy:
         # Robot array index of each policy joint (a plain slice when the orders agree).
         order = [robot_joint_names.index(j) for j in self.joint_names]
         self.robot_index: slice | np.ndarray = slice(None) if order == list(range(len(robot_joint_names))) else np.array(order)
-        self.kp = self._gains("kp", meta, cfg.kp, source)
-        self.kd = self._gains("kd", meta, cfg.kd, source)
-        self.default_pos = np.array([cfg.default_joint_pos.get(j, 0.0) for j in self.joint_names])
+        # Arrays every command shares are read-only: a joint command never copies them.
+        self.kp = read_only(self._gains("kp", meta, cfg.kp, source))
+        self.kd = read_only(self._gains("kd", meta, cfg.kd, source))
+        self.default_pos = read_only(np.array([cfg.default_joint_pos.get(j, 0.0) for j in self.joint_names]))
         scale = cfg.action_scale if cfg.action_scale is not None else meta.get("action_scale")
         if scale is None:
             raise PolicyError(f"{path.name}: no action scale in metadata; set 'action_scale' in {source}")
@@ -137,8 +114,8 @@ class OnnxPolicy:
         self.obs = ObservationBuilder(cfg.observation)
         self.gait = GaitClock(cfg.gait, cfg.rate_hz)
         self._slot = {t.name: self.obs.slot(t.name) for t in cfg.observation.terms}
-        self._zeros = np.zeros(n)
-        self._damp_kd = np.full(n, cfg.damping_kd)
+        self._zeros = read_only(np.zeros(n))
+        self._damp_kd = read_only(np.full(n, cfg.damping_kd))
         self.nonfinite_events = 0
         self.latched_fault: str | None = None
         self.reset()
@@ -183,7 +160,7 @@ class OnnxPolicy:
         self.obs.reset()
         self.gait.reset()
         self.last_action = np.zeros(len(self.joint_names))
-        self.last_target = self.default_pos.copy()
+        self.last_target = self.default_pos
         self._consecutive_bad = 0
         self.latched_fault = None
 
@@ -197,9 +174,9 @@ class OnnxPolicy:
         if "base_ang_vel" in slot:
             raw[slot["base_ang_vel"]] = state.base_ang_vel
         if "projected_gravity" in slot:
-            raw[slot["projected_gravity"]] = quat_rotate_inverse(state.base_quat, GRAVITY)
+            raw[slot["projected_gravity"]] = quat.rotate_inverse_one(state.base_quat, GRAVITY)
         if "base_lin_vel" in slot:
-            raw[slot["base_lin_vel"]] = quat_rotate_inverse(state.base_quat, state.base_lin_vel)
+            raw[slot["base_lin_vel"]] = quat.rotate_inverse_one(state.base_quat, state.base_lin_vel)
         if "command_lin_vel" in slot:
             raw[slot["command_lin_vel"]] = (command.vx, command.vy)
         if "command_ang_vel" in slot:
@@ -216,10 +193,11 @@ class OnnxPolicy:
         out = self._session.run([self.cfg.output_name], {self.cfg.input_name: obs})[0]
         return np.asarray(out, float).reshape(-1)
 
-    def step(self, state: RobotState, command: VelocityCommand) -> JointCommand:
+    def step(self, state: RobotState, reference: ReferenceWindow) -> JointCommand:
         """One control tick. A non-finite output holds the last safe target; repeated ones latch damping."""
         if self.latched_fault is not None:
             return self.damping_command()
+        command = reference.velocity
         action = self.infer(self.observe(state, command))
         if not math.isfinite(float(action.sum())):  # one reduction catches any NaN or inf
             self.nonfinite_events += 1
@@ -233,7 +211,7 @@ class OnnxPolicy:
             clip = self.cfg.action_clip
             action = np.minimum(np.maximum(action, -clip), clip)
             self.last_action = action
-            target = action * self.action_scale + self.default_pos
+            target = read_only(action * self.action_scale + self.default_pos)
             self.last_target = target
         self.gait.advance(command)
         return JointCommand(q=target, dq=self._zeros, kp=self.kp, kd=self.kd, tau_ff=self._zeros)

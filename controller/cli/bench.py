@@ -1,0 +1,78 @@
+"""`g1ctl bench ...`: benchmarks, each printing and writing a JSON report.
+
+g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S]
+g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
+g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S] --report PATH
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from controller.reports import write_report
+from hw.errors import ConfigError
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    bench = sub.add_parser("bench", help="benchmarks (reports in JSON)")
+    bench_sub = bench.add_subparsers(dest="bench_command", required=True)
+    loop = bench_sub.add_parser("loop", help="stack real-time factor against a minimal inline loop")
+    loop.add_argument("--report", type=Path, default=None)
+    loop.add_argument("--policy", default="fastsac")
+    loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
+    loop.add_argument("--duration", type=float, default=20.0)
+
+    hw_bench = bench_sub.add_parser("hw", help="host bus cycle at 500 Hz against a raw python-can round trip, both in every period")
+    hw_bench.add_argument("--report", type=Path, default=None)
+    hw_bench.add_argument("--seconds", type=float, default=60.0)
+    hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
+    hw_bench.add_argument("--cpu", type=int, default=None, help="pin both loops to this CPU (default: the last one; -1: no pinning)")
+
+    inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
+    inbetween.add_argument("--data", type=Path, default=None, help="recorded motion dataset (its test split is used)")
+    inbetween.add_argument("--methods", default="ours,interp,hermite,zerovel", help="comma-separated: ours, interp, hermite, zerovel")
+    inbetween.add_argument("--lengths", default="15,30,45", help="comma-separated transition lengths (frames at 30 fps)")
+    inbetween.add_argument("--windows", type=int, default=200, help="windows per length, at most")
+    inbetween.add_argument("--seed", type=int, default=0)
+    inbetween.add_argument("--model", type=Path, default=None, help="planner model folder for 'ours' (default: the shipped one)")
+    inbetween.add_argument("--report", type=Path, default=None)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.bench_command == "hw":
+        from controller.bench.hw import run_hw_bench  # noqa: PLC0415
+
+        _emit(run_hw_bench(args.seconds, args.rt_priority, args.cpu), args.report)
+        return 0
+    if args.bench_command == "inbetween":
+        return _inbetween(args)
+    from controller.bench.loop import run_loop_bench  # noqa: PLC0415 - imports MuJoCo
+
+    _emit(run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir), args.report)
+    return 0
+
+
+def _inbetween(args: argparse.Namespace) -> int:
+    from controller.bench import inbetween as bi  # noqa: PLC0415
+
+    if args.data is None:
+        raise ConfigError("bench inbetween needs --data PATH: a recorded motion dataset")
+    cfg = bi.InbetweenConfig(
+        data=args.data, methods=bi.parse_methods(args.methods), lengths=bi.parse_lengths(args.lengths), windows=args.windows,
+        seed=args.seed, assets_dir=args.assets_dir, model_dir=args.model,
+    )  # fmt: skip
+    report = bi.run_inbetween_bench(cfg)
+    print(bi.format_table(report))
+    if args.report is not None:
+        write_report(report, args.report)
+        print(f"report: {args.report}")
+    return 0
+
+
+def _emit(report: dict[str, Any], path: Path | None) -> None:
+    print(json.dumps(report, indent=2))
+    if path is not None:
+        write_report(report, path)

@@ -1,0 +1,65 @@
+"""`g1ctl sim`: run a command scenario on the simulated G1 and report how well it tracked.
+
+g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--tracker velocity] [--duration S] [--seed N]
+          [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
+          [--input scripted|keyboard|gamepad] [--hardware sim-can|sim-mixed|PATH] [--faults FILE] [--progress]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from controller.inputs.registry import INPUTS
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    sim = sub.add_parser("sim", help="run a command scenario on the simulated G1")
+    sim.add_argument("--scenario", default="walk_turn_stop", help="shipped scenario name or path to a scenario YAML")
+    sim.add_argument("--policy", default="fastsac", help="policy preset name or path to a policy YAML")
+    sim.add_argument("--tracker", default="velocity", help="tracker by name (g1ctl scenarios lists them)")
+    sim.add_argument("--duration", type=float, default=None, help="seconds of simulated time (default: the scenario's)")
+    sim.add_argument("--seed", type=int, default=0)
+    sim.add_argument("--input", default="scripted", choices=INPUTS)
+    sim.add_argument("--video", type=Path, default=None, help="write an .mp4 or .gif of the run")
+    sim.add_argument("--video-fps", type=int, default=20)
+    sim.add_argument("--picture", type=Path, default=None, help="write a .png of the final frame")
+    sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
+    sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
+    sim.add_argument("--hardware", default=None, help="drive the sim through a hardware config's codecs and buses (sim-can, sim-mixed)")
+    sim.add_argument("--faults", default=None, help="with --hardware: YAML of faults to inject per bus (configs/faults/)")
+    sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
+    sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
+    sim.add_argument("--progress", action="store_true", help="show a progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.video is not None or args.picture is not None:
+        from sim import use_headless_gl  # noqa: PLC0415
+
+        use_headless_gl()  # before MuJoCo is imported, which fixes its OpenGL backend
+    from controller.runtime.sim_run import SimRunConfig  # noqa: PLC0415 - imports MuJoCo
+    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415
+
+    cfg = SimRunConfig(
+        scenario=args.scenario, policy=args.policy, tracker=args.tracker, duration=args.duration, seed=args.seed, input=args.input,
+        video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
+        viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
+    )  # fmt: skip
+    report = run_sim(cfg)
+    summary_keys = ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
+    print(json.dumps({k: report[k] for k in summary_keys}))
+    for key in ("video", "picture", "plot"):
+        if key in report:
+            print(f"{key}: {report[key]}")
+    if args.report:
+        print(f"report: {args.report}")
+    if "hw" in report:
+        hw = report["hw"]
+        print(json.dumps({"hw": {k: hw[k] for k in ("cycle_ms", "frames_sent", "frames_received", "dropped", "crc_errors", "faults")}}))
+    if report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"):
+        print(f"g1ctl: run ended damped at {report['damp_time']} s: {report['damp_reason']}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,52 @@
+"""What a run drives: a robot to read and write, and the time line it runs on.
+
+The session never knows which backend it has: MuJoCo directly, simulated hardware with
+MuJoCo behind the buses, or real hardware. A backend moves its own time to the control
+loop's deadlines (physics steps, or bus cycles paced on the wall clock).
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import Any
+
+from hw.robot import RobotInterface
+from hw.types import RobotState
+
+
+class Backend(abc.ABC):
+    robot: RobotInterface  # what the controller reads and writes
+
+    def start(self) -> None:  # noqa: B027 - optional: most backends are ready once built
+        """Bring the robot up (hardware: configure, soft start); a fault here ends the run like any other."""
+
+    @abc.abstractmethod
+    def now(self) -> float:
+        """Seconds on the run's time line."""
+
+    @abc.abstractmethod
+    def advance_to(self, t: float) -> None:
+        """Run the robot side (physics, bus cycles) until time `t`."""
+
+    def truth(self) -> RobotState | None:
+        """Ground truth where a simulator stands behind the robot (for metrics); None otherwise."""
+        return None
+
+    def has_fallen(self) -> bool:
+        return False
+
+    def recover_from_fall(self) -> bool:
+        """Stand the robot up again; False when that cannot be done by software (the run ends)."""
+        return False
+
+    def fault(self) -> str | None:
+        """A latched fault of the robot side, or None."""
+        return None
+
+    def report(self) -> dict[str, Any] | None:
+        """Counters for the run report (hardware: bus counters); None when there is nothing to add."""
+        return None
+
+    @abc.abstractmethod
+    def close(self) -> None:
+        """Damp and release everything; safe to call twice."""

@@ -1,0 +1,42 @@
+"""Trackers by name: `--tracker NAME` picks one; an unknown name lists the valid ones."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from controller.assets import Assets
+from controller.tracking.tracker import Tracker
+from hw.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class TrackerSpec:
+    """What a tracker is built from: a policy preset (name or YAML path), the assets, the robot's joints."""
+
+    policy: str
+    assets: Assets
+    robot_joint_names: tuple[str, ...]
+
+
+def _velocity(spec: TrackerSpec) -> Tracker:
+    from controller.tracking.presets import load_policy  # noqa: PLC0415 - loads onnxruntime only when chosen
+
+    return load_policy(spec.policy, spec.assets, spec.robot_joint_names)
+
+
+TRACKERS: dict[str, Callable[[TrackerSpec], Tracker]] = {
+    "velocity": _velocity,  # the velocity-command locomotion policy (holosoma's G1 loco policies)
+}
+
+
+def available_trackers() -> list[str]:
+    return sorted(TRACKERS)
+
+
+def make_tracker(name: str, spec: TrackerSpec) -> Tracker:
+    try:
+        factory = TRACKERS[name]
+    except KeyError:
+        raise ConfigError(f"unknown tracker '{name}' (valid: {', '.join(available_trackers())})") from None
+    return factory(spec)
