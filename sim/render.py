@@ -1,6 +1,8 @@
 """Offscreen rendering of the simulated G1 to MP4/GIF video and PNG pictures.
 
-Headless machines render with EGL (`MUJOCO_GL=egl`, set by `sim/__init__.py` when no display exists).
+Headless machines render with EGL (`MUJOCO_GL=egl`): MuJoCo reads that variable when it is
+first imported, so a command that renders calls `sim.use_headless_gl()` before it imports
+MuJoCo (`g1ctl sim` and `g1ctl viz plan` do; so must any other command that renders).
 Shadows, reflections and the skybox are off: on a CPU-only machine they cost about
 four times the frame time for little a person watching a gait needs.
 """
@@ -25,7 +27,10 @@ def _make_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Ren
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
     except Exception as exc:  # EGL/OSMesa failures come as various exception types
-        raise RenderError(f"cannot render offscreen ({exc}); set MUJOCO_GL=egl or osmesa, or drop --video/--picture") from exc
+        raise RenderError(
+            f"cannot render offscreen ({exc}); set MUJOCO_GL=egl or osmesa before MuJoCo is imported"
+            " (a command that renders calls sim.use_headless_gl() first), or drop --video/--picture"
+        ) from exc
     flags = renderer.scene.flags
     flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
     flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0

@@ -1,14 +1,16 @@
-"""PNG plot of commanded against measured velocity."""
+"""PNG plot of commanded against measured velocity.
+
+Drawn on a `Figure` with its own Agg canvas: no pyplot, no global backend, nothing changed
+for the rest of the process.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from controller.runtime.tracking_metrics import TrackingMetrics
 
@@ -17,7 +19,9 @@ def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:
     t = np.asarray(metrics.times)
     cmd = np.asarray(metrics.commanded).reshape(-1, 3)
     meas = np.asarray(metrics.measured).reshape(-1, 3)
-    fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+    fig = Figure(figsize=(10, 7))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, 1, sharex=True)
     labels = ("vx (m/s)", "vy (m/s)", "yaw rate (rad/s)")
     for i, (ax, label) in enumerate(zip(axes, labels, strict=True)):
         ax.plot(t, meas[:, i], color="tab:blue", linewidth=0.8, label="measured")
@@ -30,4 +34,3 @@ def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)
-    plt.close(fig)
