@@ -72,6 +72,9 @@ def run_viz(args: argparse.Namespace) -> int:
     from controller.assets import ensure_assets  # noqa: PLC0415
     from controller.planner.request import PlanRequest  # noqa: PLC0415
     from controller.planner.runtime import Planner  # noqa: PLC0415
+    from sim import use_headless_gl  # noqa: PLC0415
+
+    use_headless_gl()  # before MuJoCo is imported: it reads MUJOCO_GL then
     from sim.world import build_model  # noqa: PLC0415 - imports MuJoCo
 
     if args.out.suffix.lower() not in (".png", ".mp4", ".gif"):
@@ -128,16 +131,16 @@ def _columns(length: int, count: int = 6) -> list[int]:
 
 
 def _filmstrip(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
-    import matplotlib  # noqa: PLC0415
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: PLC0415
+    from matplotlib.figure import Figure  # noqa: PLC0415 - its own canvas: no pyplot, no global backend
 
     from sim.render import render_poses  # noqa: PLC0415
 
     length = len(next(iter(rows.values())))
     columns = _columns(length)
-    fig, axes = plt.subplots(len(rows), len(columns) + 1, figsize=(2.2 * (len(columns) + 1), 1.8 * len(rows)), squeeze=False)
+    fig = Figure(figsize=(2.2 * (len(columns) + 1), 1.8 * len(rows)))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(rows), len(columns) + 1, squeeze=False)
     context_image = render_poses(model, context[-1:], lookat)[0]
     for r, (label, frames) in enumerate(rows.items()):
         images = [context_image, *render_poses(model, frames[columns], lookat)]
@@ -154,7 +157,6 @@ def _filmstrip(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: 
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _video(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
