@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from hw import quat
 from hw.drivers import MitBusDriver
 from hw.errors import ConfigError, HardwareFault
 from hw.hardware_robot import HardwareRobot, Lifecycle
@@ -182,14 +183,11 @@ def imu_summary(host: HardwareRobot, pump: Pump, seconds: float = 1.0) -> dict[s
     sample = host.imu.latest
     if sample is None:
         raise HardwareFault(f"no valid IMU frame in {seconds} s on '{host.imu.name}'; check the port, baud rate and wiring")
-    w, x, y, z = sample.quaternion
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    rpy = quat.rpy(sample.quaternion).tolist()
     c = host.imu.counters
     return {
         "quaternion_wxyz": [round(v, 5) for v in sample.quaternion],
-        "rpy_deg": [round(math.degrees(v), 2) for v in (roll, pitch, yaw)],
+        "rpy_deg": [round(math.degrees(v), 2) for v in rpy],
         "angular_velocity": [round(v, 4) for v in sample.angular_velocity],
         "linear_acceleration": [round(v, 3) for v in sample.linear_acceleration],
         "frames": c.frames,

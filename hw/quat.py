@@ -47,6 +47,19 @@ def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:
     return multiply(multiply(q, qv), conjugate(q))[..., 1:]
 
 
+def to_matrix(q: ArrayLike) -> FloatArray:
+    """Rotation matrices [..., 3, 3] of q [..., 4], normalized first: body to world coordinates."""
+    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
+    return np.stack(
+        (
+            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
+            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
+            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
 def log(q: ArrayLike) -> FloatArray:
     """Rotation vector [..., 3] (axis * angle, angle in [0, pi]) of q [..., 4]."""
     q = normalize(q)
@@ -64,6 +77,18 @@ def exp(rotvec: ArrayLike) -> FloatArray:
     angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
     scale = np.where(angle > 1e-9, np.sin(angle / 2) / np.maximum(angle, _EPS), 0.5)
     return np.concatenate((np.cos(angle / 2), rotvec * scale), axis=-1)
+
+
+def from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> FloatArray:
+    """Rotation by `angle` [...] (rad) about `axis` [..., 3] (any length but zero)."""
+    return exp(normalize(axis) * np.asarray(angle, dtype=np.float64)[..., None])
+
+
+def from_yaw(yaw: ArrayLike) -> FloatArray:
+    """Rotation [..., 4] by `yaw` [...] (rad) about the world z axis: a heading with no tilt."""
+    half = np.asarray(yaw, dtype=np.float64) / 2
+    zero = np.zeros_like(half)
+    return np.stack((np.cos(half), zero, zero, np.sin(half)), axis=-1)
 
 
 def angle(a: ArrayLike, b: ArrayLike) -> FloatArray:
@@ -100,6 +125,14 @@ def heading(q: ArrayLike) -> FloatArray:
     """Yaw (rad, in (-pi, pi]) of the body x axis projected on the ground plane."""
     w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
     return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def rpy(q: ArrayLike) -> FloatArray:
+    """Roll, pitch, yaw (rad) [..., 3] of q [..., 4], the z-y-x Euler angles (q = yaw * pitch * roll); pitch in [-pi/2, pi/2]."""
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    return np.stack((roll, pitch, heading(q)), axis=-1)
 
 
 def wrap_angle(a: ArrayLike) -> FloatArray:

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from hw import g1 as constants
+from hw import quat
 from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import FloatArray, JointCommand, RobotState
@@ -58,8 +59,8 @@ class SimRobot(RobotInterface):
         mujoco.mj_resetData(self.model, self.data)
         self.data.time = t
         q = np.asarray(constants.default_joint_vector() if joint_pos is None else joint_pos, float)
-        self.data.qpos[:3] = [0.0, 0.0, constants.STANDING_PELVIS_HEIGHT]
-        self.data.qpos[3:7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+        self.data.qpos[constants.QPOS_ROOT_POS] = [0.0, 0.0, constants.STANDING_PELVIS_HEIGHT]
+        self.data.qpos[constants.QPOS_ROOT_QUAT] = quat.from_yaw(yaw)
         self.data.qpos[self._qpos_adr] = q
         mujoco.mj_forward(self.model, self.data)
         self.write(
@@ -72,10 +73,10 @@ class SimRobot(RobotInterface):
             time=float(d.time),
             joint_pos=d.qpos[self._qpos_adr].copy(),
             joint_vel=d.qvel[self._dof_adr].copy(),
-            base_quat=d.qpos[3:7].copy(),
-            base_ang_vel=d.qvel[3:6].copy(),  # free-joint angular velocity is in the body frame
-            base_pos=d.qpos[:3].copy(),
-            base_lin_vel=d.qvel[:3].copy(),
+            base_quat=d.qpos[constants.QPOS_ROOT_QUAT].copy(),
+            base_ang_vel=d.qvel[constants.QVEL_ROOT_ANG].copy(),  # free-joint angular velocity is in the body frame
+            base_pos=d.qpos[constants.QPOS_ROOT_POS].copy(),
+            base_lin_vel=d.qvel[constants.QVEL_ROOT_LIN].copy(),
         )
 
     def write(self, command: JointCommand) -> None:

@@ -15,7 +15,6 @@ import pytest
 from onnx import TensorProto, helper, numpy_helper
 
 from controller.assets import Assets, ensure_assets
-from controller.planner import features as ft
 from hw import g1, quat
 from hw.g1 import JOINT_NAMES
 
@@ -105,6 +104,6 @@ def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: 
     qpos[:, 1] = -3.0 + np.cumsum(0.03 * np.sin(yaw))
     qpos[:, 2] = 0.78 + 0.01 * np.sin(t / 3)
     tilt = quat.exp(np.stack((0.05 * np.sin(t / 5), 0.03 * np.cos(t / 4), np.zeros(frames)), axis=-1))
-    qpos[:, 3:7] = quat.multiply(ft.quat_from_yaw(yaw), tilt)
+    qpos[:, 3:7] = quat.multiply(quat.from_yaw(yaw), tilt)
     qpos[:, 7:] = 0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS))
     return qpos

@@ -17,8 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from hw import quat
-from hw import g1
+from hw import g1, quat
 
 FloatArray = NDArray[np.float64]
 
@@ -26,18 +25,12 @@ ROOT_XY = slice(0, 2)
 ROOT_Z = 2
 HEADING = 3
 TILT = slice(4, 7)
-JOINTS = slice(7, 7 + g1.NUM_JOINTS)
-NUM_CHANNELS = 7 + g1.NUM_JOINTS
+JOINTS = g1.QPOS_JOINTS  # the joint angles keep their qpos columns
+NUM_CHANNELS = g1.QPOS_SIZE
 RAMP_FRAMES = 4  # the residual window rises from 0 to 1 over this many frames away from a constraint
 
 
 # ---- planar helpers --------------------------------------------------------------------
-
-
-def quat_from_yaw(yaw: FloatArray) -> FloatArray:
-    half = np.asarray(yaw) / 2
-    zero = np.zeros_like(half)
-    return np.stack((np.cos(half), zero, zero, np.sin(half)), axis=-1)
 
 
 def rotate_xy(xy: FloatArray, yaw: FloatArray) -> FloatArray:
@@ -51,24 +44,24 @@ def rotate_xy(xy: FloatArray, yaw: FloatArray) -> FloatArray:
 
 def frame_origin(qpos: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The canonical frame of `qpos` [..., 36]: its root's horizontal position and heading."""
-    return qpos[..., :2], quat.heading(qpos[..., 3:7])
+    return qpos[..., :2], quat.heading(qpos[..., g1.QPOS_ROOT_QUAT])
 
 
 def to_channels(qpos: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
     """Frames [..., T, 36] -> channels [..., T, 36] in the frame (origin_xy [..., 2], origin_yaw [...])."""
-    rotation = qpos[..., 3:7]
+    rotation = qpos[..., g1.QPOS_ROOT_QUAT]
     heading = quat.heading(rotation)
-    tilt = quat.log(quat.multiply(quat_from_yaw(-heading), rotation))
+    tilt = quat.log(quat.multiply(quat.from_yaw(-heading), rotation))
     relative = np.unwrap(heading - np.asarray(origin_yaw)[..., None], axis=-1)
     relative = relative - 2 * np.pi * np.round(relative[..., -1:] / (2 * np.pi))  # the last frame's heading in (-pi, pi]
     xy = rotate_xy(qpos[..., :2] - np.asarray(origin_xy)[..., None, :], -np.asarray(origin_yaw)[..., None])
-    return np.concatenate((xy, qpos[..., 2:3], relative[..., None], tilt, qpos[..., 7:]), axis=-1)
+    return np.concatenate((xy, qpos[..., 2:3], relative[..., None], tilt, qpos[..., g1.QPOS_JOINTS]), axis=-1)
 
 
 def from_channels(channels: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
     """Inverse of `to_channels`: unit quaternions, sign-continuous over time."""
     yaw = channels[..., HEADING] + np.asarray(origin_yaw)[..., None]
-    rotation = quat.continuous(quat.normalize(quat.multiply(quat_from_yaw(yaw), quat.exp(channels[..., TILT]))))
+    rotation = quat.continuous(quat.normalize(quat.multiply(quat.from_yaw(yaw), quat.exp(channels[..., TILT]))))
     xy = rotate_xy(channels[..., ROOT_XY], np.asarray(origin_yaw)[..., None]) + np.asarray(origin_xy)[..., None, :]
     return np.concatenate((xy, channels[..., ROOT_Z : ROOT_Z + 1], rotation, channels[..., JOINTS]), axis=-1)
 

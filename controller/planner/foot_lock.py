@@ -18,11 +18,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hw import quat
+from hw import g1, quat
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
+_LEGS = g1.joint_slice(g1.LEG_JOINTS, qpos=True)  # left leg then right leg, six joints each
+_LEG_COLUMNS = np.array([g1.joint_indices(leg, qpos=True) for leg in (g1.LEFT_LEG_JOINTS, g1.RIGHT_LEG_JOINTS)])  # [2, 6]
+_POS, _ROT = g1.QPOS_ROOT_POS, g1.QPOS_ROOT_QUAT
 FADE_FRAMES = 3
 DAMPING = 0.02  # m: damped least squares keeps corrections small near a straight knee
 ITERATIONS = 1
@@ -48,7 +51,7 @@ class LegChains:
         def stacked(key: str) -> FloatArray:
             return np.stack([np.asarray(leg[key], dtype=np.float64) for leg in legs])
 
-        return cls(stacked("offsets"), _matrices(stacked("quats")), stacked("axes"), stacked("sole"))
+        return cls(stacked("offsets"), quat.to_matrix(stacked("quats")), stacked("axes"), stacked("sole"))
 
     def forward(self, root_pos: FloatArray, root_rot: FloatArray, q: FloatArray, leg: NDArray[np.intp]) -> tuple[FloatArray, ...]:
         """Sole points [K, 3], joint positions [K, 6, 3] and world joint axes [K, 6, 3] of legs `leg` [K] at angles q [K, 6]."""
@@ -72,11 +75,11 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     """Plans [S, N, 36] with stance feet pinned; `fixed` [N, 2] marks frames whose leg joints a keyframe constrains."""
     seeds, frames = qpos.shape[:2]
     both = np.array([0, 1])
-    root_rot = _matrices(qpos[..., 3:7])  # [S, N, 3, 3]
+    root_rot = quat.to_matrix(qpos[..., _ROT])  # [S, N, 3, 3]
     # Every frame's and the context's soles in one pass: rows (seed, frame, leg) then the context's two legs.
-    rows_q = np.concatenate((qpos[..., 7:19].reshape(-1, 2, 6).reshape(-1, 6), context_last[7:19].reshape(2, 6)))
-    rows_pos = np.concatenate((np.repeat(qpos[..., :3].reshape(-1, 3), 2, axis=0), np.tile(context_last[:3], (2, 1))))
-    rows_rot = np.concatenate((np.repeat(root_rot.reshape(-1, 3, 3), 2, axis=0), np.tile(_matrices(context_last[3:7]), (2, 1, 1))))
+    rows_q = np.concatenate((qpos[..., _LEGS].reshape(-1, 2, 6).reshape(-1, 6), context_last[_LEGS].reshape(2, 6)))
+    rows_pos = np.concatenate((np.repeat(qpos[..., _POS].reshape(-1, 3), 2, axis=0), np.tile(context_last[_POS], (2, 1))))
+    rows_rot = np.concatenate((np.repeat(root_rot.reshape(-1, 3, 3), 2, axis=0), np.tile(quat.to_matrix(context_last[_ROT]), (2, 1, 1))))
     rows_leg = np.concatenate((np.tile(both, seeds * frames), both))
     soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
     sole, context_sole = soles[:-2].reshape(seeds, frames, 2, 3), soles[-2:]
@@ -98,10 +101,10 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     if not active.any():
         return qpos.copy()
     seed_idx, frame_idx, leg_idx = np.nonzero(active)
-    columns = 7 + 6 * leg_idx[:, None] + np.arange(6)  # each active row's leg joints in qpos
+    columns = _LEG_COLUMNS[leg_idx]  # each active row's leg joints in qpos
     start_q = qpos[seed_idx[:, None], frame_idx[:, None], columns]
     q, goal = start_q.copy(), target[active]
-    base_pos, base_rot = qpos[seed_idx, frame_idx, :3], root_rot[seed_idx, frame_idx]
+    base_pos, base_rot = qpos[seed_idx, frame_idx, _POS], root_rot[seed_idx, frame_idx]
     row = (seed_idx * frames + frame_idx) * 2 + leg_idx  # the first pass already holds each active row's kinematics
     current, joint_pos, axes = soles[row], all_joints[row], all_axes[row]
     for iteration in range(ITERATIONS):
@@ -129,18 +132,6 @@ def _fade(contacts: BoolArray) -> FloatArray:
     following = np.minimum.accumulate(np.where(contacts, t, 2 * far)[:, ::-1], axis=1)[:, ::-1]  # the next one at or after t
     distance = np.minimum(t - last, following - t)
     return np.clip(1.0 - distance / (FADE_FRAMES + 1), 0.0, 1.0)
-
-
-def _matrices(q: FloatArray) -> FloatArray:
-    w, x, y, z = np.moveaxis(quat.normalize(q), -1, 0)
-    return np.stack(
-        (
-            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
-            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
-            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
-        ),
-        axis=-2,
-    )
 
 
 def _skew(v: FloatArray) -> FloatArray:

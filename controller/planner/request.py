@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from hw import g1
+from hw import g1, quat
 from hw.errors import G1Error
 
 FloatArray = NDArray[np.float64]
@@ -97,8 +97,8 @@ class PlanRequest:
 def target_root(frame: int, x: float, y: float, heading: float) -> Keyframe:
     """A keyframe that constrains only the root's horizontal position and heading (rad, about z)."""
     qpos = np.zeros(QPOS_DIM)
-    qpos[:3] = (x, y, g1.STANDING_PELVIS_HEIGHT)
-    qpos[3:7] = (np.cos(heading / 2), 0.0, 0.0, np.sin(heading / 2))
+    qpos[g1.QPOS_ROOT_POS] = (x, y, g1.STANDING_PELVIS_HEIGHT)
+    qpos[g1.QPOS_ROOT_QUAT] = quat.from_yaw(heading)
     return Keyframe(frame, qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=True, root_height=False)
 
 

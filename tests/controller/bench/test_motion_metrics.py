@@ -1,4 +1,4 @@
-"""In-betweening metrics, baselines and quaternion helpers on hand-made data with known answers."""
+"""In-betweening metrics and baselines on hand-made data with known answers."""
 
 from __future__ import annotations
 
@@ -13,15 +13,6 @@ from hw import g1, quat
 RNG = np.random.default_rng(7)
 
 
-def yaw_quat(yaw: float | np.ndarray) -> np.ndarray:
-    half = np.asarray(yaw, dtype=float) / 2
-    return np.stack((np.cos(half), 0 * half, 0 * half, np.sin(half)), axis=-1)
-
-
-def axis_quat(axis: np.ndarray, angle: float) -> np.ndarray:
-    return quat.exp(np.asarray(axis, dtype=float) / np.linalg.norm(axis) * angle)
-
-
 def frame(xyz: tuple[float, float, float] = (0.0, 0.0, 0.78), q: np.ndarray | None = None, joints: np.ndarray | None = None) -> np.ndarray:
     out = np.zeros(g1.QPOS_SIZE)
     out[:3] = xyz
@@ -32,9 +23,9 @@ def frame(xyz: tuple[float, float, float] = (0.0, 0.0, 0.78), q: np.ndarray | No
 
 def random_context() -> np.ndarray:
     """Four frames moving with some velocity, turning and tilting."""
-    base = frame((0.1, -0.2, 0.76), axis_quat(np.array([0.1, 0.2, 1.0]), 0.4), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))
+    base = frame((0.1, -0.2, 0.76), quat.from_axis_angle([0.1, 0.2, 1.0], 0.4), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))
     step = np.concatenate((RNG.uniform(-0.02, 0.02, 3), np.zeros(4), RNG.uniform(-0.03, 0.03, g1.NUM_JOINTS)))
-    spin = axis_quat(np.array([0.3, -0.1, 1.0]), 0.05)
+    spin = quat.from_axis_angle([0.3, -0.1, 1.0], 0.05)
     frames = []
     q = base[3:7]
     for k in range(4):
@@ -43,24 +34,6 @@ def random_context() -> np.ndarray:
         q = quat.multiply(q, spin)
         frames.append(f)
     return np.array(frames)
-
-
-# ---- quaternions ---------------------------------------------------------------------------
-
-
-def test_quaternion_helpers() -> None:
-    q = quat.normalize(RNG.normal(size=(5, 4)))
-    np.testing.assert_allclose(quat.multiply(q, quat.conjugate(q)), np.tile([1.0, 0, 0, 0], (5, 1)), atol=1e-12)
-    np.testing.assert_allclose(quat.angle(q, -q), 0.0, atol=1e-6)
-    np.testing.assert_allclose(np.abs(np.sum(quat.exp(quat.log(q)) * q, axis=-1)), 1.0, atol=1e-12)
-    assert quat.angle(yaw_quat(0.0), yaw_quat(0.5)) == pytest.approx(0.5)
-    assert quat.heading(yaw_quat(2.0)) == pytest.approx(2.0)
-    mid = quat.slerp(yaw_quat(0.0), yaw_quat(np.pi / 2), 0.5)
-    np.testing.assert_allclose(mid, yaw_quat(np.pi / 4), atol=1e-12)
-    np.testing.assert_allclose(quat.slerp(yaw_quat(0.0), -yaw_quat(np.pi / 2), 0.5), mid, atol=1e-12)  # the short way
-    np.testing.assert_allclose(quat.rotate(yaw_quat(np.pi / 2), [1.0, 0, 0]), [0.0, 1.0, 0.0], atol=1e-12)
-    flipped = np.array([yaw_quat(0.1), -yaw_quat(0.2), yaw_quat(0.3)])
-    assert (np.sum(quat.continuous(flipped, axis=0)[1:] * quat.continuous(flipped, axis=0)[:-1], axis=-1) > 0).all()
 
 
 # ---- metrics -------------------------------------------------------------------------------
@@ -115,7 +88,7 @@ def test_position_rotation_and_target_errors() -> None:
     pred = true + np.array([0.03, 0.04, 0.0])
     assert mt.l2p(pred, true) == pytest.approx(0.05)
     q = quat.normalize(RNG.normal(size=(6, 5, 4)))
-    assert mt.l2q(quat.multiply(q, yaw_quat(0.3)), q) == pytest.approx(0.3)
+    assert mt.l2q(quat.multiply(q, quat.from_yaw(0.3)), q) == pytest.approx(0.3)
     assert mt.l2q(-q, q) == pytest.approx(0.0, abs=1e-6)
     bodies = np.zeros((4, 3))
     moved = bodies.copy()
@@ -125,10 +98,10 @@ def test_position_rotation_and_target_errors() -> None:
 
 
 def test_reach_needs_position_and_heading() -> None:
-    target, heading = np.array([1.0, 2.0, 0.78]), yaw_quat(3.1)
-    assert mt.reached(target + np.array([0.04, 0.0, 0.2]), yaw_quat(3.1 + np.deg2rad(10)), target, heading)  # wraps past pi
+    target, heading = np.array([1.0, 2.0, 0.78]), quat.from_yaw(3.1)
+    assert mt.reached(target + np.array([0.04, 0.0, 0.2]), quat.from_yaw(3.1 + np.deg2rad(10)), target, heading)  # wraps past pi
     assert not mt.reached(target + np.array([0.06, 0.0, 0.0]), heading, target, heading)
-    assert not mt.reached(target, yaw_quat(3.1 - np.deg2rad(20)), target, heading)
+    assert not mt.reached(target, quat.from_yaw(3.1 - np.deg2rad(20)), target, heading)
     batch = mt.reached(
         np.stack((target, target + 1)), np.stack((heading, heading)), np.stack((target, target)), np.stack((heading, heading))
     )
@@ -162,7 +135,7 @@ def cubic_at_end(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def test_baselines_start_at_the_context_and_end_at_the_target() -> None:
     context = random_context()
-    target = frame((0.8, 0.4, 0.74), -axis_quat(np.array([0.0, 0.3, 1.0]), 1.2), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))  # far hemisphere
+    target = frame((0.8, 0.4, 0.74), -quat.from_axis_angle([0.0, 0.3, 1.0], 1.2), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))  # far hemisphere
     velocity = np.concatenate((RNG.uniform(-0.5, 0.5, 3), RNG.uniform(-1, 1, 3), RNG.uniform(-1, 1, g1.NUM_JOINTS)))
     length = 20
     lin = np.r_[0:3, 7:36]
@@ -184,7 +157,7 @@ def test_baselines_start_at_the_context_and_end_at_the_target() -> None:
 
 def test_hermite_matches_the_context_velocity_at_the_start_and_the_target_velocity_at_the_end() -> None:
     context = random_context()
-    target = frame((0.6, 0.1, 0.77), axis_quat(np.array([0.2, 0.1, 1.0]), 0.9), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))
+    target = frame((0.6, 0.1, 0.77), quat.from_axis_angle([0.2, 0.1, 1.0], 0.9), RNG.uniform(-0.5, 0.5, g1.NUM_JOINTS))
     velocity = np.concatenate((RNG.uniform(-0.5, 0.5, 3), RNG.uniform(-1, 1, 3), RNG.uniform(-1, 1, g1.NUM_JOINTS)))
     out = baselines.hermite(context, target, 25, velocity)
     lin, vlin = np.r_[0:3, 7:36], np.r_[0:3, 6:35]
@@ -204,7 +177,7 @@ def test_inverse_right_jacobian_maps_body_rates_to_rotation_vector_rates() -> No
 
 
 def test_hermite_and_interp_reproduce_uniform_motion() -> None:
-    frames = np.array([frame((0.1 * k, 0.02 * k, 0.78), yaw_quat(0.05 * k), np.full(g1.NUM_JOINTS, 0.01 * k)) for k in range(30)])
+    frames = np.array([frame((0.1 * k, 0.02 * k, 0.78), quat.from_yaw(0.05 * k), np.full(g1.NUM_JOINTS, 0.01 * k)) for k in range(30)])
     context, truth, target, after = frames[:4], frames[4:24], frames[24], frames[25]
     velocity = baselines.finite_velocity(target, after)
     np.testing.assert_allclose(velocity[3:6], [0.0, 0.0, 0.05 * FPS], atol=1e-9)

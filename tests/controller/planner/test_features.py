@@ -28,7 +28,7 @@ def test_channels_do_not_depend_on_where_the_robot_stands() -> None:
     qpos = turning_walk()
     moved = qpos.copy()
     moved[:, :2] = ft.rotate_xy(qpos[:, :2], np.full(len(qpos), 1.3)) + np.array([10.0, 4.0])
-    moved[:, 3:7] = quat.multiply(ft.quat_from_yaw(np.full(len(qpos), 1.3)), qpos[:, 3:7])
+    moved[:, 3:7] = quat.multiply(quat.from_yaw(np.full(len(qpos), 1.3)), qpos[:, 3:7])
     a = ft.to_channels(qpos, *ft.frame_origin(qpos[3]))
     b = ft.to_channels(moved, *ft.frame_origin(moved[3]))
     assert np.allclose(a, b, atol=1e-9)

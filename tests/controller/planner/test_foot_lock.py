@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.planner.foot_lock import LegChains, _matrices, lock_feet
+from controller.planner.foot_lock import LegChains, lock_feet
+from hw import quat
 from sim.kinematics import leg_chain_specs
 from tests.conftest import turning_walk
 
@@ -20,7 +21,7 @@ def test_leg_chains_match_mujoco_forward_kinematics(g1_model) -> None:  # type: 
         mujoco.mj_kinematics(g1_model, data)
         for side, body in enumerate(("left_foot_contact_point", "right_foot_contact_point")):
             leg = qpos[t, None, 7 + 6 * side : 13 + 6 * side]
-            sole, _, _ = legs.forward(qpos[t, None, :3], _matrices(qpos[t, None, 3:7]), leg, np.array([side]))
+            sole, _, _ = legs.forward(qpos[t, None, :3], quat.to_matrix(qpos[t, None, 3:7]), leg, np.array([side]))
             assert np.allclose(sole[0], data.xpos[g1_model.body(body).id], atol=1e-9)
 
 
@@ -34,7 +35,7 @@ def test_stance_foot_is_pinned_and_keyframes_stay_exact(g1_model) -> None:  # ty
     locked = lock_feet(qpos, contacts, legs, turning_walk(32)[0], fixed)
 
     def left_sole(q: np.ndarray) -> np.ndarray:
-        return legs.forward(q[:, :3], _matrices(q[:, 3:7]), q[:, 7:13], np.zeros(len(q), dtype=np.intp))[0]
+        return legs.forward(q[:, :3], quat.to_matrix(q[:, 3:7]), q[:, 7:13], np.zeros(len(q), dtype=np.intp))[0]
 
     before, after = left_sole(qpos[0]), left_sole(locked[0])
     drift_before = np.linalg.norm(np.diff(before[5:15, :2], axis=0), axis=-1).mean()
