@@ -1,7 +1,7 @@
 """Bench bring-up operations on a `HardwareRobot`: scan, monitor, zero, sweep, damp, IMU.
 
-Each takes a `pump` callable that runs one bus cycle and paces it (500 Hz on real
-hardware; one physics step on simulated hardware), so the same code drives both.
+Each takes a `pump` callable that runs one bus cycle and paces it (`CONTROL_CYCLE_HZ` on
+real hardware; one physics step on simulated hardware), so the same code drives both.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from hw import quat
 from hw.drivers import MitBusDriver
 from hw.errors import ConfigError, HardwareFault
+from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import JointConfig, motor_to_joint
 from hw.protocols import mit
@@ -141,7 +142,7 @@ def sweep(
     q = hold_pose.copy()
     limit = torque_fraction * joint.torque_limit
     max_tau = 0.0
-    dt = 1.0 / 500.0
+    dt = 1.0 / CONTROL_CYCLE_HZ
     reason = "completed"
     for a, b in itertools.pairwise(waypoints):
         steps = max(int(abs(b - a) / (speed * dt)), 1)
@@ -171,14 +172,14 @@ def sweep(
 def damp(host: HardwareRobot, pump: Pump, seconds: float = 2.0) -> None:
     """Damping on every joint for `seconds` (the motors keep it until they time out or are re-commanded)."""
     host.enter_damping("damping requested by 'g1ctl hw damp'")
-    for _ in range(max(int(seconds * 500), 1)):
+    for _ in range(max(int(seconds * CONTROL_CYCLE_HZ), 1)):
         pump()
 
 
 def imu_summary(host: HardwareRobot, pump: Pump, seconds: float = 1.0) -> dict[str, Any]:
     if host.imu is None:
         raise ConfigError("this hardware config has no IMU (add an 'imu' section with its serial bus)")
-    for _ in range(max(int(seconds * 500), 1)):
+    for _ in range(max(int(seconds * CONTROL_CYCLE_HZ), 1)):
         pump()
     sample = host.imu.latest
     if sample is None:

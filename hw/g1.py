@@ -46,6 +46,14 @@ EFFORT_LIMITS: dict[str, float] = {
     "right_wrist_yaw_joint": 5.0,
 }  # fmt: skip
 
+# Rate (Hz) of the hardware cycle: one command to and one reply from every motor per period
+# (the G1's rt/lowcmd rate; bring-up and the hardware runtime pace their loops on it).
+CONTROL_CYCLE_HZ = 500.0
+
+# Joint damping (N m s/rad, joint side) of the safe state, zero stiffness: what the safety
+# layer, the simulated robot and the policies send when they damp.
+DAMPING_KD = 2.0
+
 QPOS_SIZE = 7 + NUM_JOINTS  # root xyz + root quaternion wxyz + joints
 ROOT_BODY = "pelvis"
 TORSO_BODY = "torso_link"

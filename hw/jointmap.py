@@ -2,20 +2,22 @@
 
 `load_hardware_config` validates everything a bring-up engineer can get wrong in the
 YAML: unknown keys, missing or unknown joints, duplicate motor ids on one bus, a bus that
-is not declared, a motor model without ranges, limits in the wrong order.
+is not declared, a motor model without ranges, limits in the wrong order. A G1 joint
+without `torque_limit` takes the G1's effort limit (`hw.g1.EFFORT_LIMITS`, the MJCF's),
+so a config of the G1's own actuators does not restate the table the physics clamps to.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from hw.errors import ConfigError
-from hw.g1 import JOINT_NAMES
+from hw.g1 import DAMPING_KD, EFFORT_LIMITS, JOINT_NAMES
 from hw.protocols.mit import MitRanges
 from hw.shipped import config_dir
-from hw.yamlconfig import from_dict, load_config, load_yaml, preset_names, resolve_preset
+from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset
 
 
 @dataclass(frozen=True)
@@ -44,7 +46,7 @@ class JointConfig:
     id: int
     position_limits: tuple[float, float]
     velocity_limit: float
-    torque_limit: float
+    torque_limit: float  # N m, joint side; may be left out of the YAML for a G1 joint (see the module docstring)
     model: str = ""  # mit: a model in configs/motors.yaml
     reply: Literal["basic", "cubemars", "damiao"] = "cubemars"  # mit reply variant
     direction: int = 1  # +1 or -1: motor positive direction relative to the joint
@@ -99,7 +101,7 @@ class SafetyConfig:
     cycle_timeout: float = 0.003  # s: how long one cycle waits for the replies
     max_position_step: float = 0.3  # rad: largest change of a position target between cycles
     max_temperature: float = 85.0  # deg C
-    damping_kd: float = 2.0  # N m s/rad, joint side, while damping
+    damping_kd: float = DAMPING_KD  # N m s/rad, joint side, while damping
     soft_start_time: float = 3.0  # s: ramp to the default pose on activate
     max_missed_replies: int = 5  # consecutive cycles a motor may miss before it is a fault
 
@@ -132,9 +134,22 @@ def hardware_config_path(name_or_path: str) -> Path:
 
 def load_hardware_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig:
     path = hardware_config_path(name_or_path)
-    cfg = load_config(HardwareConfig, path)
+    cfg = from_dict(HardwareConfig, with_g1_torque_limits(load_yaml(path)), str(path))
     validate(cfg, str(path), expected_joints, load_motor_models())
     return cfg
+
+
+def with_g1_torque_limits(data: Any) -> Any:
+    """The raw YAML with `torque_limit` filled in from `hw.g1.EFFORT_LIMITS` on every G1 joint
+    that leaves it out; anything else is left for `from_dict` to check."""
+    joints = data.get("joints") if isinstance(data, dict) else None
+    if not isinstance(joints, dict):
+        return data
+    filled = {
+        name: {"torque_limit": EFFORT_LIMITS[name], **joint} if isinstance(joint, dict) and name in EFFORT_LIMITS else joint
+        for name, joint in joints.items()
+    }
+    return {**data, "joints": filled}
 
 
 def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:

@@ -25,7 +25,7 @@ class FallConfig:
 class SimRobot(RobotInterface):
     """G1 in MuJoCo. Joint PD runs inside the physics step (see `sim.world`)."""
 
-    def __init__(self, model: mujoco.MjModel, fall: FallConfig = FallConfig(), damping_kd: float = 2.0) -> None:
+    def __init__(self, model: mujoco.MjModel, fall: FallConfig = FallConfig(), damping_kd: float = constants.DAMPING_KD) -> None:
         super().__init__()
         self.model = model
         self.data = mujoco.MjData(model)

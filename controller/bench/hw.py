@@ -36,7 +36,7 @@ from hw.protocols import mit
 from hw.realtime import last_cpu, request_realtime
 from hw.types import JointCommand
 
-RATE_HZ = 500.0
+RATE_HZ = g1.CONTROL_CYCLE_HZ  # the hardware cycle
 SLICE_S = 0.5  # stack and raw alternate in slices this long: the machine's speed drifts over seconds
 WARMUP_PERIODS = 25  # each slice's first 50 ms settle caches and threads: run, not timed (both loops)
 BENCH_SOFT_START_S = 0.2  # the benchmark times the steady state, not the bring-up ramp

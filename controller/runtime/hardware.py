@@ -11,10 +11,11 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 
 from controller.runtime.loop import WallClock
+from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import load_hardware_config
 
-CYCLE_HZ = 500.0
+CYCLE_HZ = CONTROL_CYCLE_HZ
 GANTRY_HEIGHT_M = 0.25
 
 

@@ -18,6 +18,7 @@ AMBIENT_C = 30.0
 HEATING_C_PER_S = 5.0  # at the motor's full torque
 COOLING_TIME_S = 60.0
 OVER_TEMPERATURE_C = 95.0
+SEIZED_KD = 500.0  # N m s/rad, joint side: damping so stiff that a seized output stays where it is
 
 
 @dataclass
@@ -48,7 +49,7 @@ class EmulatedMotor:
         if stuck:
             # The output is seized: the joint does not move, and the motor's own PD pushes
             # against the seizure, so its current (the reported torque) grows with the error.
-            plant.set_joint_command(self.joint_name, plant.joint_state(self.joint_name)[0], 0.0, 0.0, 500.0, 0.0)
+            plant.set_joint_command(self.joint_name, plant.joint_state(self.joint_name)[0], 0.0, 0.0, SEIZED_KD, 0.0)
             c = self._last_command
             if c is not None and self.enabled:
                 position, velocity, _ = self.reading(plant)
