@@ -8,7 +8,8 @@ loop's deadlines (physics steps, or bus cycles paced on the wall clock).
 from __future__ import annotations
 
 import abc
-from typing import Any
+from types import TracebackType
+from typing import Any, Self
 
 from hw.robot import RobotInterface
 from hw.types import RobotState
@@ -50,3 +51,9 @@ class Backend(abc.ABC):
     @abc.abstractmethod
     def close(self) -> None:
         """Damp and release everything; safe to call twice."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        self.close()

@@ -146,9 +146,15 @@ def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     hw = json.loads(report_path.read_text())["hw"]
     assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
 
-    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", "configs/faults/overheat-left-knee.yaml", "--duration", "1")
+    overheat_path = tmp_path / "overheat.json"
+    overheat_faults = "configs/faults/overheat-left-knee.yaml"
+    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", overheat_faults, "--duration", "1", "--report", str(overheat_path))
     assert overheat.returncode == 1
     assert "left_knee_joint" in overheat.stderr and "over-temperature" in overheat.stderr
+    report = json.loads(overheat_path.read_text())  # a run that ends in a fault at bring-up still reports
+    assert report["final_mode"] == "damp" and "over-temperature" in report["damp_reason"] and report["damp_time"] is not None
+    assert report["hw"]["faults"] >= 1 and report["hw"]["state"] in ("error", "closed") and report["hw"]["frames_sent"] > 0
+    assert overheat_path.with_suffix(".png").is_file()
 
     assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
     bad = tmp_path / "bad.yaml"
