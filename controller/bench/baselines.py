@@ -12,11 +12,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from hw import quat
 from controller.planner.request import CONTEXT_FRAMES, FPS, QPOS_DIM, FloatArray, PlanRequestError
+from hw import g1, quat
 
-QVEL_DIM = QPOS_DIM - 1  # root linear velocity (world), root angular velocity (body), joint velocities
-POS, ROT, JOINTS = slice(0, 3), slice(3, 7), slice(7, QPOS_DIM)
+QVEL_DIM = g1.QVEL_SIZE  # root linear velocity (world), root angular velocity (body), joint velocities
+POS, ROT, JOINTS = g1.QPOS_ROOT_POS, g1.QPOS_ROOT_QUAT, g1.QPOS_JOINTS
 
 
 def interp(context: ArrayLike, target: ArrayLike, length: int) -> FloatArray:
@@ -62,14 +62,14 @@ def hermite(context: ArrayLike, target: ArrayLike, length: int, target_velocity:
     m0 = finite_velocity(frames[-2], start, fps=1.0)  # per frame
     m1 = velocity / FPS
     out = np.empty((length, QPOS_DIM))
-    lin = np.r_[0:3, 7:QPOS_DIM]
-    vlin = np.r_[0:3, 6:QVEL_DIM]
+    lin = np.r_[POS, JOINTS]  # what is interpolated per channel, in qpos and in qvel
+    vlin = np.r_[g1.QVEL_ROOT_LIN, g1.QVEL_JOINTS]
     out[:, lin] = h00 * start[lin] + h10 * span * m0[vlin] + h01 * end[lin] + h11 * span * m1[vlin]
 
     q0 = quat.normalize(start[ROT])
     chord = quat.log(quat.multiply(quat.conjugate(q0), end[ROT]))
-    w0 = m0[3:6]  # h'(0) = omega_0: the right Jacobian is the identity at 0
-    w1 = _inverse_right_jacobian(chord) @ m1[3:6]
+    w0 = m0[g1.QVEL_ROOT_ANG]  # h'(0) = omega_0: the right Jacobian is the identity at 0
+    w1 = _inverse_right_jacobian(chord) @ m1[g1.QVEL_ROOT_ANG]
     h = h10 * span * w0 + h01 * chord + h11 * span * w1
     out[:, ROT] = quat.normalize(quat.multiply(q0, quat.exp(h)))
     return _sign_continuous(start, out)

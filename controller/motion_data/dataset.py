@@ -35,14 +35,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.planner.request import FPS  # clips are at the planner contract's frame rate
 from hw import quat
 from hw.errors import ConfigError
-from hw.g1 import JOINT_NAMES, NUM_JOINTS, QPOS_SIZE
+from hw.g1 import JOINT_NAMES, NUM_JOINTS, QPOS_ROOT_QUAT, QPOS_SIZE
 
 FloatArray = NDArray[np.float64]
 
 FORMAT_VERSION = 1
-FPS = 30.0
 MANIFEST = "manifest.json"
 SPLITS = ("train", "val", "test")
 QPOS_LAYOUT = "root position xyz (m, z up), root quaternion w,x,y,z, 29 joint angles (rad) in joint_names order"
@@ -312,12 +312,12 @@ def read_csv_clip(path: str | Path, fps: float) -> FloatArray:
     bad_rows = np.flatnonzero(~np.isfinite(raw).all(axis=1))
     if bad_rows.size:
         raise ConfigError(f"{p}: NaN or infinite values from data row {bad_rows[0] + 1} ({bad_rows.size} rows)")
-    qpos = np.concatenate([raw[:, :3], raw[:, 6:7], raw[:, 3:6], raw[:, 7:]], axis=1)  # x,y,z,w -> w,x,y,z
-    norms = np.linalg.norm(qpos[:, 3:7], axis=1)
+    qpos = np.concatenate([raw[:, :3], raw[:, 6:7], raw[:, 3:6], raw[:, 7:]], axis=1)  # CSV x,y,z,w -> qpos w,x,y,z
+    norms = np.linalg.norm(qpos[:, QPOS_ROOT_QUAT], axis=1)
     if (norms < 1e-6).any():
         raise ConfigError(f"{p}: a zero root quaternion at data row {int(np.argmax(norms < 1e-6)) + 1}")
-    qpos[:, 3:7] /= norms[:, None]
-    qpos[:, 3:7] = quat.continuous(qpos[:, 3:7])
+    qpos[:, QPOS_ROOT_QUAT] /= norms[:, None]
+    qpos[:, QPOS_ROOT_QUAT] = quat.continuous(qpos[:, QPOS_ROOT_QUAT])
     return resample_qpos(qpos, fps, FPS)
 
 
@@ -340,7 +340,8 @@ def resample_qpos(qpos: FloatArray, fps_in: float, fps_out: float = FPS) -> Floa
     i0 = np.minimum(np.floor(src + 1e-9).astype(np.int64), n - 2)
     a = np.clip(src - i0, 0.0, 1.0)
     out = q[i0] * (1.0 - a)[:, None] + q[i0 + 1] * a[:, None]
-    out[:, 3:7] = quat.continuous(quat.slerp(q[i0, 3:7], q[i0 + 1, 3:7], a))
+    rot = QPOS_ROOT_QUAT
+    out[:, rot] = quat.continuous(quat.slerp(q[i0, rot], q[i0 + 1, rot], a))
     return out
 
 

@@ -14,12 +14,12 @@ from numpy.typing import NDArray
 
 from controller.motion_data.dataset import GESTURES
 from hw.errors import ConfigError
-from hw.g1 import JOINT_NAMES
+from hw.g1 import UPPER_BODY_JOINTS
 from hw.types import FloatArray
 
 # --- gestures ------------------------------------------------------------------------------------
 
-UPPER_JOINTS: tuple[str, ...] = JOINT_NAMES[12:]  # waist (3), left arm (7), right arm (7)
+UPPER_JOINTS: tuple[str, ...] = UPPER_BODY_JOINTS  # waist (3), left arm (7), right arm (7)
 BLEND_S = 0.5
 _ARM = ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_roll", "wrist_pitch", "wrist_yaw")
 _MIRRORED = {"shoulder_roll", "shoulder_yaw", "wrist_roll", "wrist_yaw", "waist_yaw", "waist_roll"}

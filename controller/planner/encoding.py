@@ -22,18 +22,27 @@ from hw import g1
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
+SPEC_VERSION = 1  # of the exported model's spec (planner.json): bump when this encoding changes
 FRAMES = MAX_LENGTH
 CURVE_STRIDE = 4
 CONTACTS = 2
 OUT_CHANNELS = ft.NUM_CHANNELS + CONTACTS
-_LEGS, _WAIST, _ARMS = slice(7, 19), slice(19, 22), slice(22, 36)
+
+
+def _joint_channels(group: tuple[str, ...]) -> list[int]:
+    return [ft.JOINTS.start + i for i in g1.joint_indices(group)]
+
+
 GROUPS: tuple[tuple[str, list[int]], ...] = (
     ("root_plan", [0, 1, ft.HEADING]),
-    ("root_pose", [ft.ROOT_Z, 4, 5, 6]),
-    ("legs", list(range(_LEGS.start, _LEGS.stop))),
-    ("waist", list(range(_WAIST.start, _WAIST.stop))),
-    ("arms", list(range(_ARMS.start, _ARMS.stop))),
+    ("root_pose", [ft.ROOT_Z, *range(ft.TILT.start, ft.TILT.stop)]),
+    ("legs", _joint_channels(g1.LEG_JOINTS)),
+    ("waist", _joint_channels(g1.WAIST_JOINTS)),
+    ("arms", _joint_channels(g1.ARM_JOINTS)),
 )
+# Joint-vector slices for the random partial keyframes of training.
+_LEGS, _UPPER_BODY, _ARMS = (g1.joint_slice(group) for group in (g1.LEG_JOINTS, g1.UPPER_BODY_JOINTS, g1.ARM_JOINTS))
+_ONE_ARM = (g1.joint_slice(g1.LEFT_ARM_JOINTS), g1.joint_slice(g1.RIGHT_ARM_JOINTS))
 COND_DIM = (  # context, curve samples, group masks, length one-hot, text slot and flag
     CONTEXT_FRAMES * ft.NUM_CHANNELS
     + (FRAMES // CURVE_STRIDE) * ft.NUM_CHANNELS
@@ -101,11 +110,11 @@ def joint_group_mask(rng: np.random.Generator) -> NDArray[np.bool_]:
     if choice == 0:
         mask[:] = True
     elif choice == 1:
-        mask[15:] = True  # both arms
+        mask[_ARMS] = True
     elif choice == 2:
-        mask[15 + 7 * rng.integers(2) :][:7] = True  # one arm
+        mask[_ONE_ARM[rng.integers(2)]] = True
     elif choice == 3:
-        mask[:12] = True  # legs
+        mask[_LEGS] = True
     else:
-        mask[12:] = True  # waist and arms
+        mask[_UPPER_BODY] = True  # waist and arms
     return mask

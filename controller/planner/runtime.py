@@ -20,10 +20,11 @@ from controller.planner import encoding as enc
 from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
 from controller.planner.request import Plan, PlanRequest, PlanRequestError
+from hw import g1
 from hw.errors import AssetError
 from hw.shipped import model_dir as model_dir_of
 
-SPEC_VERSION = 1
+_LEGS = (g1.joint_slice(g1.LEFT_LEG_JOINTS), g1.joint_slice(g1.RIGHT_LEG_JOINTS))  # in the joint vector
 
 
 class Planner:
@@ -53,7 +54,7 @@ class Planner:
             raise AssetError(f"{spec_path} is not valid JSON ({exc}); restore it from the repository") from exc
         if "legs" not in spec or len(spec["legs"]) != 2:
             raise AssetError(f"{spec_path} has no leg chains for foot locking; re-export the model with 'g1ctl train planner'")
-        expected = {"version": SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS}
+        expected = {"version": enc.SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS}
         wrong = {k: spec.get(k) for k, v in expected.items() if spec.get(k) != v}
         if wrong:
             raise AssetError(f"planner model in {folder} does not match this runtime ({wrong}, expected {expected}); retrain or update it")
@@ -91,13 +92,15 @@ class Planner:
         qpos = _continue_sign(qpos, request.context[-1])
         contacts = residual[:, :length, ft.NUM_CHANNELS :] > 0.0
         if self.legs is not None:
-            legs_fixed = np.stack((mask[:length, ft.JOINTS][:, :6].any(axis=-1), mask[:length, ft.JOINTS][:, 6:12].any(axis=-1)), axis=-1)
+            joints_fixed = mask[:length, ft.JOINTS]
+            legs_fixed = np.stack([joints_fixed[:, leg].any(axis=-1) for leg in _LEGS], axis=-1)  # [N, 2]: left, right
             qpos = lock_feet(qpos, contacts, self.legs, request.context[-1], legs_fixed)
         return qpos, contacts
 
 
 def _continue_sign(qpos: np.ndarray, last: np.ndarray) -> np.ndarray:
     """Flip plans whose root quaternion starts on the other hemisphere from the context's."""
-    flip = np.sum(qpos[..., :1, 3:7] * last[3:7], axis=-1, keepdims=True) < 0
-    qpos[..., 3:7] = np.where(flip, -qpos[..., 3:7], qpos[..., 3:7])
+    rot = g1.QPOS_ROOT_QUAT
+    flip = np.sum(qpos[..., :1, rot] * last[rot], axis=-1, keepdims=True) < 0
+    qpos[..., rot] = np.where(flip, -qpos[..., rot], qpos[..., rot])
     return qpos

@@ -26,8 +26,8 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from controller.planner import encoding as enc
 from controller.motion_data.dataset import load_dataset
+from controller.planner import encoding as enc
 from controller.training.windows import WindowSampler
 from hw.errors import ConfigError
 
@@ -36,7 +36,6 @@ log = logging.getLogger(__name__)
 CHECKPOINT = "checkpoint.pt"
 ONNX_FILE = "planner.onnx"
 SPEC_FILE = "planner.json"
-SPEC_VERSION = 1
 MODEL_KEYS = ("batch", "lr", "width", "depth", "latent", "pca_windows", "seed")  # a resumed run may change the rest (steps, threads)
 
 
@@ -232,7 +231,7 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
             dynamic_axes={"cond": {0: "batch"}, "noise": {0: "batch"}, "residual": {0: "batch"}}, opset_version=17, dynamo=False,
         )  # fmt: skip
     spec = {
-        "version": SPEC_VERSION,
+        "version": enc.SPEC_VERSION,
         "onnx": ONNX_FILE,
         "latent": cfg.latent,
         "cond_dim": enc.COND_DIM,
