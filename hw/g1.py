@@ -58,7 +58,7 @@ QPOS_SIZE = 7 + NUM_JOINTS  # root xyz + root quaternion wxyz + joints
 ROOT_BODY = "pelvis"
 TORSO_BODY = "torso_link"
 IMU_SITE = "imu_in_pelvis"
-FOOT_BODIES = ("left_ankle_roll_link", "right_ankle_roll_link")
+ANKLE_BODIES = ("left_ankle_roll_link", "right_ankle_roll_link")  # the feet's links: their geoms touch the floor
 
 # Pelvis height (m) with the default pose standing on flat ground, feet just touching.
 STANDING_PELVIS_HEIGHT = 0.78

@@ -17,7 +17,7 @@ from sim.world import build_model
 
 FloatArray = NDArray[np.float64]
 
-FOOT_BODIES = ("left_foot_contact_point", "right_foot_contact_point")
+FOOT_CONTACT_BODIES = ("left_foot_contact_point", "right_foot_contact_point")  # frames at the soles, no geoms
 CONTACT_HEIGHT_M = 0.05  # a foot whose contact point is lower than this, in both adjacent frames, is in contact
 
 
@@ -28,9 +28,10 @@ class G1Kinematics:
         self.model = build_model(mjcf_path)
         self._data = mujoco.MjData(self.model)
         # Body 0 is the world; the foot contact points are frames, not links.
-        self.body_names = tuple(self.model.body(i).name for i in range(1, self.model.nbody) if self.model.body(i).name not in FOOT_BODIES)
+        names = (self.model.body(i).name for i in range(1, self.model.nbody))
+        self.body_names = tuple(name for name in names if name not in FOOT_CONTACT_BODIES)
         self._bodies = np.array([self.model.body(n).id for n in self.body_names])
-        self._feet = np.array([self.model.body(n).id for n in FOOT_BODIES])
+        self._feet = np.array([self.model.body(n).id for n in FOOT_CONTACT_BODIES])
 
     def forward(self, qpos: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Returns link positions [T, B, 3], link quaternions w,x,y,z [T, B, 4] and foot contact points [T, 2, 3]."""

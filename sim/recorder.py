@@ -21,7 +21,7 @@ FLOOR_GEOM = "floor"
 class FootContacts:
     """Which feet touch the floor now: any MuJoCo contact between a foot body's geoms and the floor."""
 
-    def __init__(self, model: mujoco.MjModel, foot_bodies: tuple[str, str] = constants.FOOT_BODIES, floor: str = FLOOR_GEOM) -> None:
+    def __init__(self, model: mujoco.MjModel, foot_bodies: tuple[str, str] = constants.ANKLE_BODIES, floor: str = FLOOR_GEOM) -> None:
         try:
             self._floor = model.geom(floor).id
             feet = [model.body(name).id for name in foot_bodies]

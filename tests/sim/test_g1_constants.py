@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from hw import g1 as constants
+from sim.kinematics import FOOT_CONTACT_BODIES
 
 
 def test_joint_order_matches_model(g1_model) -> None:
@@ -32,7 +33,7 @@ def test_default_pose_within_joint_ranges(g1_model) -> None:
 
 
 def test_named_bodies_exist(g1_model) -> None:
-    for body in (constants.ROOT_BODY, constants.TORSO_BODY, *constants.FOOT_BODIES):
+    for body in (constants.ROOT_BODY, constants.TORSO_BODY, *constants.ANKLE_BODIES, *FOOT_CONTACT_BODIES):
         assert g1_model.body(body).id > 0
     assert g1_model.site(constants.IMU_SITE).id >= 0
     assert np.isclose(g1_model.opt.timestep, 0.002)
