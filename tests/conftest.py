@@ -6,8 +6,9 @@ import json
 import os
 import subprocess
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import onnx
@@ -18,6 +19,19 @@ from controller.assets import Assets, ensure_assets
 from hw import g1, quat
 from hw.g1 import JOINT_NAMES
 
+if TYPE_CHECKING:
+    import mujoco
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _process_scheduling_is_left_alone() -> Iterator[None]:
+    """No test may pin the pytest process or change its scheduling (later tests would run under it):
+    pinning and real-time requests belong in a subprocess or a helper thread."""
+    before = (os.sched_getaffinity(0), os.sched_getscheduler(0))
+    yield
+    after = (os.sched_getaffinity(0), os.sched_getscheduler(0))
+    assert after == before, f"a test changed the pytest process's (CPU affinity, scheduler) from {before} to {after}"
+
 
 @pytest.fixture(scope="session")
 def assets() -> Assets:
@@ -25,7 +39,7 @@ def assets() -> Assets:
 
 
 @pytest.fixture(scope="session")
-def g1_model(assets: Assets):  # type: ignore[no-untyped-def]
+def g1_model(assets: Assets) -> mujoco.MjModel:
     from sim.world import build_model
 
     return build_model(assets.g1_mjcf)
