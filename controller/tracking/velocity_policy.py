@@ -22,7 +22,7 @@ from controller.tracking.observation import ObservationBuilder, ObservationLayou
 from controller.tracking.tracker import Tracker
 from hw import quat
 from hw.errors import ConfigError, PolicyError
-from hw.g1 import DAMPING_KD
+from hw.g1 import DAMPING_KD, DEFAULT_JOINT_POS
 from hw.types import FloatArray, JointCommand, RobotState, read_only
 
 GRAVITY = np.array([0.0, 0.0, -1.0])
@@ -40,8 +40,10 @@ class GaitConfig:
 class PolicyConfig:
     onnx: str  # file name in the asset cache, or a path
     observation: ObservationLayout
-    default_joint_pos: dict[str, float]  # joints not listed default to 0 rad
-    input_name: str = "actor_obs"
+    # The pose actions are offsets from; joints not listed are 0 rad. Default: the G1 standing
+    # pose the holosoma policies were trained around (hw.g1.DEFAULT_JOINT_POS).
+    default_joint_pos: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_JOINT_POS))
+    input_name: str = "actor_obs"  # holosoma's exported input and output names
     output_name: str = "action"
     rate_hz: float = 50.0
     action_scale: float | None = None  # None: from metadata 'action_scale', else an error
