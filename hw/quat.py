@@ -138,3 +138,23 @@ def rpy(q: ArrayLike) -> FloatArray:
 def wrap_angle(a: ArrayLike) -> FloatArray:
     """Angles wrapped into [-pi, pi)."""
     return (np.asarray(a, dtype=np.float64) + np.pi) % (2 * np.pi) - np.pi
+
+
+def rotate_inverse_one(q: FloatArray, v: FloatArray) -> FloatArray:
+    """Rotate one world vector `v` [3] into the frame of one unit quaternion `q` [4] (w, x, y, z).
+
+    The per-tick form of `rotate(conjugate(q), v)`, written on scalars: a control tick
+    calls it twice, and numpy's small-array overhead would cost more than the arithmetic.
+    """
+    w, x, y, z = q.tolist()
+    vx, vy, vz = v.tolist()
+    k = 2.0 * w * w - 1.0
+    dot2 = 2.0 * (x * vx + y * vy + z * vz)
+    w2 = 2.0 * w
+    return np.array(
+        (
+            vx * k - (y * vz - z * vy) * w2 + x * dot2,
+            vy * k - (z * vx - x * vz) * w2 + y * dot2,
+            vz * k - (x * vy - y * vx) * w2 + z * dot2,
+        )
+    )

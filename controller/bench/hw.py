@@ -25,8 +25,8 @@ from typing import Any
 import can
 import numpy as np
 
+from controller.reports import percentiles_ms
 from controller.runtime.loop import RateLoop, WallClock
-from controller.runtime.tracking_metrics import percentiles_ms
 from hw import g1
 from hw.emulation.plant import StaticPlant
 from hw.emulation.rig import SimulatedHardware

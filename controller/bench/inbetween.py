@@ -38,6 +38,7 @@ import numpy as np
 from controller.bench import baselines
 from controller.bench import motion_metrics as mt
 from controller.planner.request import ALLOWED_LENGTHS, CONTEXT_FRAMES, FPS, MAX_LENGTH, FloatArray, Keyframe, PlanRequest
+from controller.reports import percentiles_ms
 from hw.errors import ConfigError
 
 DEFAULT_METHODS = ("ours", "interp", "hermite", "zerovel")
@@ -150,12 +151,12 @@ def _ours(cfg: InbetweenConfig) -> Method:
         req = request(w, cfg.seed, lengths=(LATENCY_PLAN_FRAMES,), frame=LATENCY_PLAN_FRAMES - 1)
         for _ in range(cfg.latency_warmup):
             planner.plan(req)
-        times = np.empty(cfg.latency_repeats)
-        for i in range(cfg.latency_repeats):
+        times = []
+        for _ in range(cfg.latency_repeats):
             started = time.perf_counter()
             planner.plan(req)
-            times[i] = time.perf_counter() - started
-        return {"p50": round(float(np.percentile(times, 50)) * 1e3, 4), "p99": round(float(np.percentile(times, 99)) * 1e3, 4)}
+            times.append(time.perf_counter() - started)
+        return percentiles_ms(times)
 
     return Method(predict, stochastic=True, latency=latency)
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from controller.assets import ensure_assets
 from controller.inputs.scripted import load_scenario
-from controller.tracking.presets import load_policy
 from controller.runtime.sim_run import SimRunConfig, run
+from controller.tracking.presets import load_policy
 from hw import g1 as constants
 from sim.world import build_model
 

@@ -14,8 +14,8 @@ import itertools
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hw import quat
 from controller.planner.request import FPS
+from hw import quat
 
 FloatArray = NDArray[np.float64]
 

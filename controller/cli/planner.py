@@ -19,7 +19,7 @@ from controller.planner.request import Keyframe
 from hw.errors import ConfigError
 
 
-def add_planner_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     train = sub.add_parser("train", help="train models (needs the [train] extra: torch)")
     train_sub = train.add_subparsers(dest="train_command", required=True)
     planner = train_sub.add_parser("planner", help="train the in-betweening planner and export it to ONNX")
@@ -41,6 +41,10 @@ def add_planner_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]
     plan.add_argument("--seeds", type=int, default=4)
     plan.add_argument("--seed", type=int, default=0, help="which window of the data")
     plan.add_argument("--temperature", type=float, default=None, help="sampling noise scale (default: the model's; higher varies more)")
+
+
+def run(args: argparse.Namespace) -> int:
+    return run_train(args) if args.command == "train" else run_viz(args)
 
 
 def run_train(args: argparse.Namespace) -> int:

@@ -14,7 +14,6 @@ from hw.shipped import config_dir
 from hw.yamlconfig import load_config, preset_names
 
 
-
 @dataclass(frozen=True)
 class ScenarioStep:
     """From time `t` (s) on, command this velocity until the next step."""

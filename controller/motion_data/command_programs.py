@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.motion_data.gestures import BLEND_S, smoothstep, with_gesture
 from controller.inputs.base import CommandLimits, VelocityCommand
 from controller.motion_data.dataset import GESTURES
+from controller.motion_data.gestures import BLEND_S, smoothstep, with_gesture
 
 # --- command programs --------------------------------------------------------------------------
 

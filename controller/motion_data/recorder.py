@@ -27,7 +27,6 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
-from controller.motion_data.gestures import GesturePlayer
 from controller.inputs.base import VelocityCommand
 from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
 from controller.motion_data.dataset import (
@@ -39,8 +38,10 @@ from controller.motion_data.dataset import (
     save_dataset,
     split_for_seed,
 )
+from controller.motion_data.gestures import GesturePlayer
+from controller.reference.window import ReferenceWindow
 from controller.tracking.presets import load_policy
-from controller.tracking.velocity_policy import OnnxPolicy
+from controller.tracking.velocity_policy import VelocityPolicy
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES
 from hw.types import FloatArray, JointCommand, RobotState
@@ -80,7 +81,7 @@ class Recorder:
     def __init__(self, policy: str, assets_dir: str | None) -> None:
         assets = ensure_assets(assets_dir)
         self.robot = SimRobot(build_model(assets.g1_mjcf))
-        self.policy: OnnxPolicy = load_policy(policy, assets, self.robot.joint_names)
+        self.policy: VelocityPolicy = load_policy(policy, assets, self.robot.joint_names)
         if self.policy.joint_names != self.robot.joint_names:
             raise ConfigError(f"policy '{policy}' must drive all {len(JOINT_NAMES)} G1 joints in the standard order to record gestures")
         model = self.robot.model
@@ -164,7 +165,7 @@ class Recorder:
             velocity, gesture, weight, tau = at(state.time)
             if gesture and weight > 0.0:
                 state = self._hide_gesture(state, gesture, weight)
-            command = policy.step(state, velocity)
+            command = policy.step(state, ReferenceWindow(state.time, velocity))
             if gesture:
                 q = self.gestures.apply(command.q, gesture, weight, tau)
                 command = JointCommand(q=q, dq=command.dq, kp=command.kp, kd=command.kd, tau_ff=command.tau_ff)

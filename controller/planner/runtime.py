@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import onnxruntime as ort
 
+from controller.onnx_session import open_session
 from controller.planner import encoding as enc
 from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
@@ -58,15 +59,7 @@ class Planner:
         wrong = {k: spec.get(k) for k, v in expected.items() if spec.get(k) != v}
         if wrong:
             raise AssetError(f"planner model in {folder} does not match this runtime ({wrong}, expected {expected}); retrain or update it")
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = threads
-        options.inter_op_num_threads = 1
-        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-        options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
-        try:
-            session = ort.InferenceSession(str(folder / spec["onnx"]), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own untyped errors
-            raise AssetError(f"cannot load planner ONNX {folder / spec['onnx']}: {exc}") from exc
+        session = open_session(folder / spec["onnx"], AssetError, "planner ONNX", threads)
         return cls(session, spec, foot_lock, temperature)
 
     def plan(self, request: PlanRequest) -> Plan:
