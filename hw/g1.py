@@ -74,10 +74,12 @@ def default_joint_vector() -> list[float]:
 QPOS_ROOT_POS = slice(0, 3)  # root position xyz (m, world frame)
 QPOS_ROOT_QUAT = slice(3, 7)  # root quaternion w, x, y, z
 QPOS_JOINTS = slice(7, QPOS_SIZE)  # joint angles in JOINT_NAMES order
+QPOS_ROOT = slice(0, 7)  # the floating base's whole pose: position and quaternion
 QVEL_SIZE = 6 + NUM_JOINTS  # MuJoCo qvel: root linear velocity (world), root angular velocity (body), joints
 QVEL_ROOT_LIN = slice(0, 3)
 QVEL_ROOT_ANG = slice(3, 6)
 QVEL_JOINTS = slice(6, QVEL_SIZE)
+QVEL_ROOT = slice(0, 6)
 
 
 # ---- joint groups ---------------------------------------------------------------------------

@@ -6,6 +6,7 @@ import threading
 
 import numpy as np
 
+from hw import g1
 from hw.types import JointCommand
 from sim.robot import SimRobot
 
@@ -31,8 +32,8 @@ class MuJoCoPlant:
         self._data = data
         self._gantry: np.ndarray | None = None
         if gantry_height is not None:
-            data.qpos[2] += gantry_height
-            self._gantry = data.qpos[:7].copy()
+            data.qpos[2] += gantry_height  # root z
+            self._gantry = data.qpos[g1.QPOS_ROOT].copy()
         robot.damp()  # limp until the first command arrives: zero gains
         self.robot.write(JointCommand(q=self._q, dq=self._dq, kp=self._kp, kd=self._kd, tau_ff=self._tau))
 
@@ -50,10 +51,10 @@ class MuJoCoPlant:
 
     def imu_reading(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
         d = self._data
-        w, x, y, z = d.qpos[3:7].tolist()
+        w, x, y, z = d.qpos[g1.QPOS_ROOT_QUAT].tolist()
         # Specific force of a body at rest: gravity reaction rotated into the IMU frame.
         gx, gy, gz = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
-        return (w, x, y, z), tuple(d.qvel[3:6].tolist()), (gx * GRAVITY, gy * GRAVITY, gz * GRAVITY)
+        return (w, x, y, z), tuple(d.qvel[g1.QVEL_ROOT_ANG].tolist()), (gx * GRAVITY, gy * GRAVITY, gz * GRAVITY)
 
     def step(self) -> None:
         with self.lock:
@@ -62,5 +63,5 @@ class MuJoCoPlant:
             )
             self.robot.step(1)
             if self._gantry is not None:
-                self._data.qpos[:7] = self._gantry
-                self._data.qvel[:6] = 0.0
+                self._data.qpos[g1.QPOS_ROOT] = self._gantry
+                self._data.qvel[g1.QVEL_ROOT] = 0.0

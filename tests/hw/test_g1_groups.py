@@ -45,10 +45,12 @@ def test_qpos_and_qvel_layout() -> None:
     qpos = np.array(["x", "y", "z", "qw", "qx", "qy", "qz", *g1.JOINT_NAMES])
     assert list(qpos[g1.QPOS_ROOT_POS]) == ["x", "y", "z"] and list(qpos[g1.QPOS_ROOT_QUAT]) == ["qw", "qx", "qy", "qz"]
     assert tuple(qpos[g1.QPOS_JOINTS]) == g1.JOINT_NAMES
+    assert list(qpos[g1.QPOS_ROOT]) == ["x", "y", "z", "qw", "qx", "qy", "qz"]
     qvel = np.array(["vx", "vy", "vz", "wx", "wy", "wz", *g1.JOINT_NAMES])
     assert len(qvel) == g1.QVEL_SIZE == 35
     assert list(qvel[g1.QVEL_ROOT_LIN]) == ["vx", "vy", "vz"] and list(qvel[g1.QVEL_ROOT_ANG]) == ["wx", "wy", "wz"]
     assert tuple(qvel[g1.QVEL_JOINTS]) == g1.JOINT_NAMES
+    assert list(qvel[g1.QVEL_ROOT]) == ["vx", "vy", "vz", "wx", "wy", "wz"]
 
 
 def test_bad_groups_fail_loudly() -> None:
