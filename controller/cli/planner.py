@@ -79,7 +79,8 @@ def run_viz(args: argparse.Namespace) -> int:
     from sim import use_headless_gl  # noqa: PLC0415
 
     use_headless_gl()  # before MuJoCo is imported: it reads MUJOCO_GL then
-    from sim.world import build_model  # noqa: PLC0415 - imports MuJoCo
+    from sim import plan_views  # noqa: PLC0415 - imports MuJoCo
+    from sim.world import build_model  # noqa: PLC0415
 
     if args.out.suffix.lower() not in (".png", ".mp4", ".gif"):
         raise ConfigError(f"--out must end in .png, .mp4 or .gif, got {args.out.name}")
@@ -95,9 +96,10 @@ def run_viz(args: argparse.Namespace) -> int:
     model = build_model(ensure_assets(args.assets_dir).g1_mjcf)
     lookat = np.array([*np.mean(plans[:, :, :2], axis=(0, 1)), 0.6])
     if args.out.suffix.lower() == ".png":
-        _filmstrip(model, scene.context, rows, lookat, args.out)
+        plan_views.filmstrip(model, scene.context, rows, lookat, args.out)
     else:
-        _video(model, scene.context, rows, lookat, args.out)
+        plan_views.video(model, scene.context, rows, lookat, args.out)
+        print(f"columns: {', '.join(rows)}", file=sys.stderr)
     print(f"plan: {args.out}")
     return 0
 
@@ -128,54 +130,3 @@ def _scene_from_data(args: argparse.Namespace) -> _Scene:
     window = clip.qpos[start : start + 4 + args.length]
     target = window[-1]
     return _Scene(window[:4], window[4:], (Keyframe(args.length - 1, target),))
-
-
-def _columns(length: int, count: int = 6) -> list[int]:
-    return sorted({round(float(v)) for v in np.linspace(0, length - 1, count)})
-
-
-def _filmstrip(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: PLC0415
-    from matplotlib.figure import Figure  # noqa: PLC0415 - its own canvas: no pyplot, no global backend
-
-    from sim.render import render_poses  # noqa: PLC0415
-
-    length = len(next(iter(rows.values())))
-    columns = _columns(length)
-    fig = Figure(figsize=(2.2 * (len(columns) + 1), 1.8 * len(rows)))
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(len(rows), len(columns) + 1, squeeze=False)
-    context_image = render_poses(model, context[-1:], lookat)[0]
-    for r, (label, frames) in enumerate(rows.items()):
-        images = [context_image, *render_poses(model, frames[columns], lookat)]
-        titles = ["context", *(f"+{(c + 1) / 30:.2f} s" for c in columns)]
-        for c, (image, title) in enumerate(zip(images, titles, strict=True)):
-            ax = axes[r, c]
-            ax.imshow(image)
-            ax.set_xticks([])
-            ax.set_yticks([])
-            if r == 0:
-                ax.set_title(title, fontsize=8)
-        axes[r, 0].set_ylabel(label, fontsize=8)
-    fig.suptitle("planned motion: last context frame, then plan frames (the last column is the target frame)", fontsize=9)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-
-
-def _video(model, context: np.ndarray, rows: dict[str, np.ndarray], lookat: np.ndarray, path: Path) -> None:
-    import imageio.v2 as imageio  # noqa: PLC0415
-
-    from sim.render import render_poses  # noqa: PLC0415
-
-    strips = [render_poses(model, np.concatenate((context, frames)), lookat, width=256, height=256) for frames in rows.values()]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    frames = [np.concatenate(row, axis=1) for row in zip(*strips, strict=True)]
-    if path.suffix.lower() == ".mp4":
-        writer = imageio.get_writer(str(path), fps=30, codec="libx264", quality=7, macro_block_size=8)
-    else:
-        writer = imageio.get_writer(str(path), mode="I", duration=1000.0 / 30, loop=0)
-    with writer:
-        for frame in frames:
-            writer.append_data(frame)
-    print(f"columns: {', '.join(rows)}", file=sys.stderr)
