@@ -39,6 +39,7 @@ from controller.bench import baselines
 from controller.bench import motion_metrics as mt
 from controller.planner.request import ALLOWED_LENGTHS, CONTEXT_FRAMES, FPS, MAX_LENGTH, FloatArray, Keyframe, PlanRequest
 from controller.reports import percentiles_ms
+from hw import g1
 from hw.errors import ConfigError
 
 DEFAULT_METHODS = ("ours", "interp", "hermite", "zerovel")
@@ -255,20 +256,21 @@ def evaluate(
         raise ValueError(f"an in-betweening method returned frames of shape {pred.shape} or non-finite values")
     pos, quat, feet = _fk(kin, pred)
     inner, gap, at = slice(0, length), slice(2, length + 2), length + 2
+    root, rot, joints = g1.QPOS_ROOT_POS, g1.QPOS_ROOT_QUAT, g1.QPOS_JOINTS
     # The motion as executed: the known context, the method's transition, the target keyframe.
     motion_pos = np.concatenate((true_pos[:, :2], pos[:, inner], true_pos[:, at:]), axis=1)
     motion_feet = np.concatenate((true_feet[:, 1:2], feet[:, inner], true_feet[:, at:]), axis=1)
     result = {
         "l2p": mt.l2p(pos[:, inner], true_pos[:, gap]),
         "l2q": mt.l2q(quat[:, inner], true_quat[:, gap]),
-        "npss": mt.npss(pred[:, inner, 7:], true_frames[:, gap, 7:]),
+        "npss": mt.npss(pred[:, inner, joints], true_frames[:, gap, joints]),
         "foot_skate": mt.foot_skate(motion_feet),
         "joint_jitter": mt.joint_jitter(motion_pos),
         "root_jitter": mt.root_jitter(motion_pos),
         "tgt_keyframe_err": float(mt.keyframe_error(pos[:, length], true_pos[:, at]).mean()),
-        "tgt_root_err": float(mt.root_error(pred[:, length, :3], true_frames[:, at, :3]).mean()),
+        "tgt_root_err": float(mt.root_error(pred[:, length, root], true_frames[:, at, root]).mean()),
         "reach_success": float(
-            mt.reached(pred[:, length, :3], pred[:, length, 3:7], true_frames[:, at, :3], true_frames[:, at, 3:7]).mean()
+            mt.reached(pred[:, length, root], pred[:, length, rot], true_frames[:, at, root], true_frames[:, at, rot]).mean()
         ),
         "diversity": 0.0,
     }

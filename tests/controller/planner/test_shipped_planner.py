@@ -27,7 +27,7 @@ def test_walks_from_standing_to_a_target_root() -> None:
     assert np.allclose(plan.qpos[43, :2], [1.0, 0.3]) and np.isclose(quat.heading(plan.qpos[43, 3:7]), 0.5, atol=1e-3)
     assert np.all((plan.qpos[:, 2] > 0.6) & (plan.qpos[:, 2] < 0.9))  # the pelvis stays at walking height
     assert np.abs(plan.qpos[0, :3] - _standing()[-1, :3]).max() < 0.05  # continues the context
-    steps = np.abs(np.diff(plan.qpos[:, 7:19], axis=0)).sum()
+    steps = np.abs(np.diff(plan.qpos[:, g1.joint_slice(g1.LEG_JOINTS, qpos=True)], axis=0)).sum()
     assert steps > 1.0  # the legs move: it walks there rather than gliding
     assert plan.contacts.any(axis=1).mean() > 0.8  # mostly a foot on the ground
 
@@ -35,10 +35,10 @@ def test_walks_from_standing_to_a_target_root() -> None:
 def test_arm_keyframe_is_met_and_seeds_differ() -> None:
     planner = Planner.load()
     pose = _standing()[-1].copy()
-    pose[7 + g1.JOINT_NAMES.index("right_shoulder_pitch_joint")] = -1.5
-    arms = np.zeros(g1.NUM_JOINTS, dtype=bool)
-    arms[15:] = True
+    pose[g1.joint_indices(["right_shoulder_pitch_joint"], qpos=True)] = -1.5
+    arms = np.isin(g1.JOINT_NAMES, g1.ARM_JOINTS)
     request = PlanRequest(_standing(), (Keyframe(20, pose, joints=arms, root=False, root_height=False),), lengths=(32,), seed=0)
     plans, _ = planner.sample(request.validated(), [0, 1, 2])
-    assert np.allclose(plans[:, 20, 7 + 15 :], pose[7 + 15 :])
+    arm_columns = g1.joint_slice(g1.ARM_JOINTS, qpos=True)
+    assert np.allclose(plans[:, 20, arm_columns], pose[arm_columns])
     assert np.ptp(plans[:, 25:, :2], axis=0).max() > 1e-3  # generative: the seeds disagree where nothing is constrained
