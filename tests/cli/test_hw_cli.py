@@ -10,6 +10,8 @@ import pytest
 from hw.shipped import config_dir
 from tests.conftest import g1ctl, one_line_error
 
+pytestmark = pytest.mark.slow  # every test runs the CLI in a subprocess
+
 
 def test_frame_encode_decode_mit() -> None:
     result = g1ctl(

@@ -10,6 +10,8 @@ import pytest
 
 from tests.conftest import ROOT, g1ctl, one_line_error
 
+pytestmark = pytest.mark.slow  # every test runs the CLI in a subprocess
+
 
 def test_five_seconds_of_walking(tmp_path: Path) -> None:
     report_path = tmp_path / "report.json"

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import pytest
+
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
+
+pytestmark = pytest.mark.slow  # benchmarks
 
 
 def test_loop_bench_reports_both_loops() -> None:

@@ -361,6 +361,7 @@ def test_episode_is_deterministic_and_a_fall_drops_two_seconds(recorder: Recorde
 # --- command line --------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_cli_record_import_info(tmp_path: Path) -> None:
     result = g1ctl("dataset", "record", "--out", str(tmp_path / "rec"), "--minutes", "0.05", "--seed", "3")
     assert result.returncode == 0, result.stderr
@@ -387,6 +388,7 @@ def test_cli_record_import_info(tmp_path: Path) -> None:
     assert info["clips"] == {"train": 0, "val": 0, "test": 1} and set(info["gesture_seconds"]) == set(GESTURES)
 
 
+@pytest.mark.slow
 def test_cli_mistakes_are_one_line(tmp_path: Path) -> None:
     assert str(tmp_path / "nope") in one_line_error(g1ctl("dataset", "info", str(tmp_path / "nope")))
     bad = tmp_path / "bad.csv"

@@ -76,6 +76,7 @@ def test_runtime_never_imports_torch(tiny_model: Path) -> None:
     assert result.stdout.strip() == "False"
 
 
+@pytest.mark.slow
 def test_viz_plan_draws_a_filmstrip_and_names_bad_input(tiny_model: Path, tmp_path: Path) -> None:
     out = tmp_path / "plan.png"
     result = g1ctl("viz", "plan", "--model", str(tiny_model), "--out", str(out), "--seeds", "2", "--length", "24")
