@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install install-train demo test lint bench planner-data planner bench-planner clean
+.PHONY: install install-train demo test test-quick lint bench planner-data planner bench-planner clean
 
 install: $(STAMP)
 
@@ -22,8 +22,13 @@ install-train: install
 demo: install
 	$(BIN)/g1ctl sim --scenario walk_turn_stop --video runs/demo.mp4 --report runs/demo.json --progress
 
+# `make test` runs every test. The ones marked `slow` (the CLI in a subprocess, benchmarks, the wheel
+# installed in a fresh venv) take most of the time: `make test-quick` (pytest -m "not slow") leaves them out.
 test: install
 	$(BIN)/python -m pytest -q
+
+test-quick: install
+	$(BIN)/python -m pytest -q -m "not slow"
 
 lint: install
 	$(BIN)/ruff check controller hw sim tests
