@@ -69,6 +69,11 @@ def default_joint_vector() -> list[float]:
     return [DEFAULT_JOINT_POS.get(name, 0.0) for name in JOINT_NAMES]
 
 
+def standing_qpos() -> list[float]:
+    """The G1 standing in the default pose at the origin, facing +x: a full MuJoCo qpos (36 values)."""
+    return [0.0, 0.0, STANDING_PELVIS_HEIGHT, 1.0, 0.0, 0.0, 0.0, *default_joint_vector()]
+
+
 # ---- qpos layout ----------------------------------------------------------------------------
 
 QPOS_ROOT_POS = slice(0, 3)  # root position xyz (m, world frame)

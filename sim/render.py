@@ -9,8 +9,11 @@ four times the frame time for little a person watching a gait needs.
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import imageio.v2 as imageio
 import mujoco
@@ -115,3 +118,16 @@ def render_poses(model: mujoco.MjModel, poses: np.ndarray, lookat: np.ndarray, w
     finally:
         renderer.close()
     return images
+
+
+def open_viewer(model: mujoco.MjModel, data: mujoco.MjData) -> Any:
+    """MuJoCo's interactive passive viewer (a context manager with `sync()`); it needs a display."""
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        # Checked here: without a display GLFW's initialisation ends the whole process.
+        raise RenderError("the MuJoCo viewer needs a display and DISPLAY is not set: drop --viewer, or use --video")
+    import mujoco.viewer  # noqa: PLC0415 - GLFW: only where a viewer is asked for
+
+    try:
+        return mujoco.viewer.launch_passive(model, data)
+    except Exception as exc:  # GLFW raises plain RuntimeError without a display
+        raise RenderError(f"cannot open the MuJoCo viewer ({exc}); it needs a display: drop --viewer or use --video") from exc

@@ -101,7 +101,7 @@ class StackCycle:
     """The stack under test: configured, soft-started and holding the default pose."""
 
     def __init__(self, cfg: HardwareConfig, stack: ExitStack) -> None:
-        plant = StaticPlant(g1.DEFAULT_JOINT_POS | {j: 0.0 for j in g1.JOINT_NAMES if j not in g1.DEFAULT_JOINT_POS})
+        plant = StaticPlant(dict(zip(g1.JOINT_NAMES, g1.default_joint_vector(), strict=True)))
         self.rig = stack.enter_context(SimulatedHardware(cfg, plant))
         self.host = stack.enter_context(HardwareRobot(self.rig.host_config))
         self.host.configure()

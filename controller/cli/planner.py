@@ -112,10 +112,7 @@ def _scene_from_target(args: argparse.Namespace) -> _Scene:
         x, y, heading = (float(v) for v in args.target.split(","))
     except ValueError as exc:
         raise ConfigError(f"--target must be x,y,heading (three numbers), got '{args.target}'") from exc
-    stand = np.zeros(g1.QPOS_SIZE)
-    stand[2], stand[3] = g1.STANDING_PELVIS_HEIGHT, 1.0
-    stand[7:] = [g1.DEFAULT_JOINT_POS.get(j, 0.0) for j in g1.JOINT_NAMES]
-    return _Scene(np.tile(stand, (4, 1)), None, (target_root(args.length - 1, x, y, heading),))
+    return _Scene(np.tile(g1.standing_qpos(), (4, 1)), None, (target_root(args.length - 1, x, y, heading),))
 
 
 def _scene_from_data(args: argparse.Namespace) -> _Scene:

@@ -94,7 +94,9 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
 
             recorder = stack.enter_context(VideoRecorder(robot.model, cfg.video, fps=cfg.video_fps))
         if cfg.viewer:
-            viewer = _open_viewer(robot, stack)
+            from sim.render import open_viewer  # noqa: PLC0415 - needs a display
+
+            viewer = stack.enter_context(open_viewer(robot.model, robot.data))
         total = round(duration * tracker.rate_hz) if duration else None
         bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
         interrupted, error = False, None
@@ -156,12 +158,3 @@ def _write_outputs(cfg: SimRunConfig, session: Session, report: dict[str, Any]) 
         report["plot"] = str(plot_path)
     if cfg.report is not None:
         write_report(report, cfg.report)
-
-
-def _open_viewer(robot: SimRobot, stack: ExitStack) -> Any:
-    import mujoco.viewer  # noqa: PLC0415 - needs a display
-
-    try:
-        return stack.enter_context(mujoco.viewer.launch_passive(robot.model, robot.data))
-    except Exception as exc:  # GLFW raises plain RuntimeError without a display
-        raise ConfigError(f"cannot open the MuJoCo viewer ({exc}); it needs a display: drop --viewer or use --video") from exc

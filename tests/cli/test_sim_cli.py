@@ -94,3 +94,9 @@ def test_gamepad_absent_is_one_line() -> None:
 def test_nonpositive_duration() -> None:
     line = one_line_error(g1ctl("sim", "--duration", "0"))
     assert "--duration must be positive" in line
+
+
+@pytest.mark.slow
+def test_viewer_without_a_display_is_one_line() -> None:
+    line = one_line_error(g1ctl("sim", "--viewer", "--duration", "0.1", env={"DISPLAY": "", "WAYLAND_DISPLAY": ""}))
+    assert "needs a display" in line and "--video" in line

@@ -14,10 +14,7 @@ pytestmark = pytest.mark.skipif(not (model_dir("planner") / "planner.onnx").is_f
 
 
 def _standing() -> np.ndarray:
-    stand = np.zeros(g1.QPOS_SIZE)
-    stand[2], stand[3] = g1.STANDING_PELVIS_HEIGHT, 1.0
-    stand[7:] = g1.default_joint_vector()
-    return np.tile(stand, (4, 1))
+    return np.tile(g1.standing_qpos(), (4, 1))
 
 
 def test_walks_from_standing_to_a_target_root() -> None:
