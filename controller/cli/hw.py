@@ -15,15 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
-from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 from hw.errors import ConfigError
-from hw.g1 import CONTROL_CYCLE_HZ
-
-if TYPE_CHECKING:
-    from hw.hardware_robot import HardwareRobot
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -72,57 +65,18 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run(args: argparse.Namespace) -> int:
     if args.hw_command == "frame":
         return _frame(args)
-    from controller.runtime.hardware import open_hardware  # noqa: PLC0415
-    from hw import bringup  # noqa: PLC0415
-    from hw.realtime import request_realtime  # noqa: PLC0415
+    from controller.runtime.bringup import BringupConfig  # noqa: PLC0415
+    from controller.runtime.bringup import run as run_bringup  # noqa: PLC0415
 
-    command = args.hw_command
-    request_realtime(args.rt_priority, args.cpu)
-    if command in ("zero", "sweep") and not args.yes and not _confirm(f"{command} {args.joint} on '{args.hardware}'?"):
+    cfg = BringupConfig(
+        operation=args.hw_command, hardware=args.hardware, joint=getattr(args, "joint", None), seconds=getattr(args, "seconds", 1.0),
+        refresh=getattr(args, "refresh", 0.25), fraction=getattr(args, "fraction", 0.3), speed=getattr(args, "speed", 0.3),
+        rt_priority=args.rt_priority, cpu=args.cpu, assets_dir=args.assets_dir,
+    )  # fmt: skip
+    if cfg.operation in ("zero", "sweep") and not args.yes and not _confirm(f"{cfg.operation} {cfg.joint} on '{cfg.hardware}'?"):
         print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
         return 1
-    with open_hardware(args.hardware, args.assets_dir, require_all=command != "scan") as (host, pump):
-        if command == "scan":
-            for _ in range(5):
-                pump()
-            rows = bringup.probe(host)
-            print(bringup.format_table(rows, ("bus", "id", "joint", "answered", "position", "temperature", "error")))
-            missing = sum(not r["answered"] for r in rows)
-            print(f"{len(rows) - missing}/{len(rows)} motors answered")
-            return 1 if missing else 0
-        if command == "monitor":
-            _monitor(host, pump, args.seconds, args.refresh)
-            return 0
-        if command == "zero":
-            print(json.dumps(bringup.zero(host, args.joint)))
-            return 0
-        if command == "sweep":
-            result = bringup.sweep(host, args.joint, pump, fraction=args.fraction, speed=args.speed)
-            print(json.dumps(vars(result)))
-            return 0 if result.completed else 1
-        if command == "damp":
-            bringup.damp(host, pump, args.seconds)
-            print(f"damping on every joint ({host.cfg.safety.damping_kd} N m s/rad) for {args.seconds} s")
-            return 0
-        if command == "imu":
-            print(json.dumps(bringup.imu_summary(host, pump, args.seconds)))
-            return 0
-    raise AssertionError(command)
-
-
-def _monitor(host: HardwareRobot, pump: Callable[[], None], seconds: float, refresh: float) -> None:
-    from hw import bringup  # noqa: PLC0415
-
-    tty = sys.stdout.isatty()
-    cycles = max(int(refresh * CONTROL_CYCLE_HZ), 1)
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        for _ in range(cycles):
-            pump()
-        table = bringup.format_table(bringup.monitor_rows(host), ("joint", "q", "dq", "tau", "temp", "error", "age_ms"))
-        print(("\x1b[H\x1b[2J" if tty else "") + table, flush=True)
-        if not tty:
-            break  # a log gets one table, not a stream of them
+    return run_bringup(cfg)
 
 
 def _confirm(question: str) -> bool:

@@ -15,7 +15,6 @@ from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import load_hardware_config
 
-CYCLE_HZ = CONTROL_CYCLE_HZ
 GANTRY_HEIGHT_M = 0.25
 
 
@@ -48,7 +47,7 @@ def open_hardware(name: str, assets_dir: str | None = None, require_all: bool = 
 
             def pump() -> None:
                 host.cycle()
-                deadline[0] = max(deadline[0] + 1.0 / CYCLE_HZ, clock.now())
+                deadline[0] = max(deadline[0] + 1.0 / CONTROL_CYCLE_HZ, clock.now())
                 clock.sleep_until(deadline[0])
 
             host.configure(require_all=require_all)
