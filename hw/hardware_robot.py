@@ -160,6 +160,7 @@ class HardwareRobot(RobotInterface):
         """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
         if self.state is not Lifecycle.INACTIVE:
             raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
+        self._await_first_imu_frame()
         self._exchange(limp=True, timeout=self.cfg.safety.cycle_timeout * 4)
         self._update_state()
         faults = self._check_feedback()
@@ -171,6 +172,21 @@ class HardwareRobot(RobotInterface):
         self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
         self._sent_q = self._q.copy()
         self.state = Lifecycle.ACTIVATING
+
+    def _await_first_imu_frame(self) -> None:
+        """Give the IMU's first frame up to its timeout (wall clock) to arrive before the activation check.
+
+        A frame sent just before activation may still sit in the port's buffers (a
+        pseudo-terminal hands data over on a kernel worker, late on a loaded machine); without
+        this wait such an IMU reads as stale and activation fails for nothing.
+        """
+        if self.imu is None or self.cfg.imu is None:
+            return
+        deadline = time.monotonic() + self.cfg.imu.timeout
+        self.imu.poll()
+        while self.imu.stamp is None and self.imu.port_fault is None and time.monotonic() < deadline:
+            time.sleep(0.001)
+            self.imu.poll()
 
     def deactivate(self) -> None:
         """Damping, then disable every motor."""

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from controller.inputs.base import VelocityCommand
-from controller.tracking.observation import ObservationBuilder, ObservationLayout, ObsTerm
 from controller.reference.window import ReferenceWindow
+from controller.tracking.observation import ObservationBuilder, ObservationLayout, ObsTerm
 from controller.tracking.velocity_policy import GaitConfig, PolicyConfig, VelocityPolicy
 from hw import quat as quaternion
 from hw.errors import ConfigError, PolicyError
