@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -121,3 +122,13 @@ def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: 
     qpos[:, 3:7] = quat.multiply(quat.from_yaw(yaw), tilt)
     qpos[:, 7:] = 0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS))
     return qpos
+
+
+def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
+    """Poll `condition` every 5 ms until it holds (True) or `timeout` s pass (False): for threads under test."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.005)
+    return True

@@ -16,6 +16,7 @@ import pytest
 
 from controller.inputs.base import CommandLimits
 from controller.inputs.gamepad import (
+from tests.conftest import wait_for
     ABS_RX,
     ABS_X,
     ABS_Y,
@@ -160,15 +161,6 @@ class InputEvent(NamedTuple):
 
 
 FULL_FORWARD = [InputEvent(EV_ABS, ABS_Y, -32768), InputEvent(EV_SYN, 0, 0)]
-
-
-def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.005)
-    return True
 
 
 @pytest.fixture

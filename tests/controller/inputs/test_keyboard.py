@@ -7,7 +7,7 @@ import logging
 import os
 import termios
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import pytest
 
@@ -15,6 +15,7 @@ from controller.inputs import keyboard
 from controller.inputs.base import CommandLimits
 from controller.inputs.keyboard import MAX_CONSECUTIVE_READ_ERRORS, KeyboardSource, KeyboardState, apply_key
 from hw.errors import InputDeviceError
+from tests.conftest import wait_for
 
 LIMITS = CommandLimits(vx=(-0.5, 0.5))
 
@@ -65,15 +66,6 @@ class Terminal:
         for fd in (self.master, self.slave):
             if fd >= 0:
                 os.close(fd)
-
-
-def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.005)
-    return True
 
 
 @pytest.fixture
