@@ -8,7 +8,7 @@ import logging
 import os
 import queue
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import NamedTuple
 
@@ -16,7 +16,6 @@ import pytest
 
 from controller.inputs.base import CommandLimits
 from controller.inputs.gamepad import (
-from tests.conftest import wait_for
     ABS_RX,
     ABS_X,
     ABS_Y,
@@ -31,6 +30,7 @@ from tests.conftest import wait_for
     apply_deadzone,
     map_gamepad,
 )
+from tests.conftest import wait_for
 
 STREAM = Path(__file__).resolve().parents[2] / "data" / "gamepad_xbox_session.jsonl"
 LIMITS = CommandLimits(vx=(-0.6, 1.0), vy=(-0.5, 0.5), yaw_rate=(-1.0, 1.0))
