@@ -40,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
 
         print(json.dumps(dataset_summary(args.path), indent=2))
         return 0
+    from controller.motion_data import csv_import  # noqa: PLC0415
     from controller.motion_data import recorder as dataset_record  # noqa: PLC0415 - imports MuJoCo
 
     if args.dataset_command == "record":
@@ -49,6 +50,6 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(dataset_record.record(cfg)))
         return 0
     if args.dataset_command == "import":
-        print(json.dumps(dataset_record.import_csv(args.csv, args.out, args.fps, args.assets_dir)))
+        print(json.dumps(csv_import.import_csv(args.csv, args.out, args.fps, args.assets_dir)))
         return 0
     raise AssertionError(args.dataset_command)

@@ -1,4 +1,4 @@
-"""`g1ctl dataset record` / `import`: motion clips for the planner from the simulated G1 or CSV files.
+"""`g1ctl dataset record`: motion clips for the planner from the simulated G1.
 
 Recording runs the locomotion policy in MuJoCo under a seeded random command program
 (stand, start, stop, walk forward and backward at varied speeds, strafe, turn in place and
@@ -29,15 +29,7 @@ from tqdm import tqdm
 from controller.assets import ensure_assets
 from controller.inputs.base import VelocityCommand
 from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
-from controller.motion_data.dataset import (
-    FPS,
-    MotionClip,
-    csv_files,
-    episode_seed,
-    import_csv_clips,
-    save_dataset,
-    split_for_seed,
-)
+from controller.motion_data.dataset import FPS, MotionClip, episode_seed, minutes_per_split, save_dataset, split_for_seed
 from controller.motion_data.gestures import GesturePlayer
 from controller.reference.window import ReferenceWindow
 from controller.tracking.presets import load_policy
@@ -238,31 +230,8 @@ def record(cfg: RecordConfig) -> dict[str, Any]:
         "clips": len(clips),
         "episodes": index,
         "falls": falls,
-        "minutes": _minutes_per_split(clips),
+        "minutes": minutes_per_split(clips),
         "sim_seconds": round(sim_seconds, 2),
         "wall_seconds": round(wall, 2),
         "sim_seconds_per_wall_second": round(sim_seconds / wall, 2) if wall > 0 else None,
     }
-
-
-def _minutes_per_split(clips: list[MotionClip]) -> dict[str, float]:
-    splits = ("train", "val", "test")
-    return {s: round(sum(c.seconds for c in clips if c.split == s) / 60.0, 2) for s in splits}
-
-
-def import_csv(csv: str | Path, out: Path, fps: float = 60.0, assets_dir: str | None = None) -> dict[str, Any]:
-    """Import G1 CSV clips (a file or a folder, recursively) at `fps` into a dataset at `out`."""
-    from sim.kinematics import G1Kinematics, foot_contacts  # noqa: PLC0415
-
-    root = Path(csv)
-    files = csv_files(root)
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"{out}: exists and is not a folder")
-    kinematics = G1Kinematics(ensure_assets(assets_dir).g1_mjcf)
-
-    def contacts_of(qpos: FloatArray) -> NDArray[np.bool_]:
-        return foot_contacts(kinematics.forward(qpos)[2])
-
-    clips = import_csv_clips(files, root, fps, contacts_of)
-    save_dataset(out, clips, None, extra={"source": "csv", "csv_fps": fps})
-    return {"out": str(out), "clips": len(clips), "minutes": _minutes_per_split(clips)}

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from controller.motion_data.csv_import import read_csv_clip, resample_qpos
 from controller.motion_data.dataset import (
     FPS,
     GESTURES,
@@ -18,8 +19,6 @@ from controller.motion_data.dataset import (
     episode_seed,
     load_dataset,
     name_seed,
-    read_csv_clip,
-    resample_qpos,
     save_dataset,
     split_for_seed,
 )
@@ -230,7 +229,7 @@ def test_bad_csv_is_one_clear_line(tmp_path: Path, text: str, fps: float, messag
 
 @pytest.mark.skipif(not G1_MOVES.is_dir(), reason=f"g1-moves clips not at {G1_MOVES} (set G1_MOVES_DIR)")
 def test_g1_moves_clips_import(tmp_path: Path) -> None:
-    from controller.motion_data.recorder import import_csv
+    from controller.motion_data.csv_import import import_csv
 
     summary = import_csv(G1_MOVES / "bonus", tmp_path / "moves", fps=60.0)
     clips = load_dataset(tmp_path / "moves")
