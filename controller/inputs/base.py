@@ -6,6 +6,7 @@ import abc
 import warnings
 from dataclasses import dataclass
 from types import TracebackType
+from typing import Self
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ class CommandSource(abc.ABC):
     def close(self) -> None:
         self._closed = True
 
-    def __enter__(self) -> CommandSource:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
