@@ -33,6 +33,11 @@ class Session:
         self.start_time = backend.now()
         self.ticks = 0
 
+    def start(self) -> None:
+        """Bring the backend up; run time counts from here (hardware: after the soft start)."""
+        self.backend.start()
+        self.start_time = self.backend.now()
+
     def tick(self) -> bool:
         """One control period; False when the run cannot go on (a fall that software cannot undo)."""
         backend, tracker, supervisor = self.backend, self.tracker, self.supervisor
@@ -65,7 +70,7 @@ class Session:
         self.supervisor.damp(f"fault: {reason}")
 
     def report(self) -> dict[str, Any]:
-        """What happened so far: tracking figures, the final mode and why, and the backend's counters."""
+        """What happened so far: tracking figures, the final mode and why (the backend's counters: `Backend.report`)."""
         supervisor = self.supervisor
         report: dict[str, Any] = {
             "tracker": self.tracker.name,
@@ -82,9 +87,6 @@ class Session:
             "estops": supervisor.estops,
             "input_losses": supervisor.input_losses,
         }
-        hw = self.backend.report()
-        if hw is not None:
-            report["hw"] = hw
         return report
 
     @property

@@ -70,83 +70,114 @@ def _check(cfg: SimRunConfig) -> float | None:
     return duration
 
 
+@dataclass
+class _BuiltRun:
+    """A run ready to go: the simulated robot, the session on its backend, the loop and the optional outputs."""
+
+    robot: SimRobot
+    session: Session
+    loop: RateLoop
+    recorder: Any  # sim.render.VideoRecorder, when a video is asked for
+    viewer: Any  # MuJoCo's passive viewer, with --viewer
+    bar: tqdm[Any]
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    wall_seconds: float
+    interrupted: bool
+    error: Exception | None
+
+
 def run(cfg: SimRunConfig) -> dict[str, Any]:
     """Run the scenario and return the report (also written to `cfg.report` when set).
 
     Raises `RunAborted` (after writing the report) when an exception ended the run.
     """
     duration = _check(cfg)
-    assets = ensure_assets(cfg.assets_dir)
     with ExitStack() as stack:
-        robot = SimRobot(build_model(assets.g1_mjcf))
-        stack.callback(robot.close)
-        tracker = make_tracker(cfg.tracker, TrackerSpec(cfg.policy, assets, robot.joint_names))
-        backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
-        stack.callback(backend.close)
-        source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
-        session = Session(backend, tracker, source)
-        realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer
-        clock = (RealtimeSimulationClock if realtime else SimulationClock)(backend.now, backend.advance_to)
-        loop = RateLoop(clock, tracker.rate_hz)
-        recorder = viewer = None
-        if cfg.video is not None:
-            from sim.render import VideoRecorder  # noqa: PLC0415 - rendering is optional
-
-            recorder = stack.enter_context(VideoRecorder(robot.model, cfg.video, fps=cfg.video_fps))
-        if cfg.viewer:
-            from sim.render import open_viewer  # noqa: PLC0415 - needs a display
-
-            viewer = stack.enter_context(open_viewer(robot.model, robot.data))
-        total = round(duration * tracker.rate_hz) if duration else None
-        bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
-        interrupted, error = False, None
-        wall_start = time.perf_counter()
-        try:
-            backend.start()
-            for tick in loop.run(duration):
-                going_on = session.tick()
-                if recorder is not None:
-                    recorder.maybe_capture(robot.data)
-                if viewer is not None:
-                    viewer.sync()
-                if tick % 10 == 9:
-                    bar.update(10)
-                if not going_on:
-                    break
-        except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
-            session.fail(str(exc))
-        except KeyboardInterrupt:
-            interrupted = True
-        except Exception as exc:  # reported, then raised again: the run fails loudly
-            error = exc
-        wall = time.perf_counter() - wall_start
-        report = _report(cfg, session, robot, loop, wall, interrupted, error)
+        built = _build(cfg, duration, stack)
+        outcome = _drive(built, duration)
+        report = _report(cfg, built, outcome)
         if cfg.picture is not None:
             from sim.render import render_picture  # noqa: PLC0415 - rendering is optional
 
-            render_picture(robot.model, robot.data, cfg.picture)
+            render_picture(built.robot.model, built.robot.data, cfg.picture)
             report["picture"] = str(cfg.picture)
-        if recorder is not None:
+        if built.recorder is not None:
             report["video"] = str(cfg.video)
-    _write_outputs(cfg, session, report)
-    if error is not None:
+    hw = built.session.backend.report()  # after closing: the counters include the damped shutdown
+    if hw is not None:
+        report["hw"] = hw
+    _write_outputs(cfg, built.session, report)
+    if outcome.error is not None:
         where = f"; report: {cfg.report}" if cfg.report else ""
-        raise RunAborted(f"run aborted after {report['sim_seconds']} s: {error}{where}") from error
+        raise RunAborted(f"run aborted after {report['sim_seconds']} s: {outcome.error}{where}") from outcome.error
     return report
 
 
-def _report(
-    cfg: SimRunConfig, session: Session, robot: SimRobot, loop: RateLoop, wall: float, interrupted: bool, error: BaseException | None
-) -> dict[str, Any]:
+def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _BuiltRun:
+    """The G1 in MuJoCo, the tracker by name, the backend, the input and the outputs; all closed by `stack`."""
+    assets = ensure_assets(cfg.assets_dir)
+    robot = SimRobot(build_model(assets.g1_mjcf))
+    stack.callback(robot.close)
+    tracker = make_tracker(cfg.tracker, TrackerSpec(cfg.policy, assets, robot.joint_names))
+    backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
+    stack.callback(backend.close)
+    source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
+    realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer
+    clock = (RealtimeSimulationClock if realtime else SimulationClock)(backend.now, backend.advance_to)
+    recorder = viewer = None
+    if cfg.video is not None:
+        from sim.render import VideoRecorder  # noqa: PLC0415 - rendering is optional
+
+        recorder = stack.enter_context(VideoRecorder(robot.model, cfg.video, fps=cfg.video_fps))
+    if cfg.viewer:
+        from sim.render import open_viewer  # noqa: PLC0415 - needs a display
+
+        viewer = stack.enter_context(open_viewer(robot.model, robot.data))
+    total = round(duration * tracker.rate_hz) if duration else None
+    bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
+    return _BuiltRun(robot, Session(backend, tracker, source), RateLoop(clock, tracker.rate_hz), recorder, viewer, bar)
+
+
+def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
+    """Bring the backend up and tick until the end, a fall that ends the run, a fault at bring-up, Ctrl-C or an exception."""
+    session = run.session
+    interrupted, error = False, None
+    wall_start = time.perf_counter()
+    try:
+        session.start()
+        for tick in run.loop.run(duration):
+            going_on = session.tick()
+            if run.recorder is not None:
+                run.recorder.maybe_capture(run.robot.data)
+            if run.viewer is not None:
+                run.viewer.sync()
+            if tick % 10 == 9:
+                run.bar.update(10)
+            if not going_on:
+                break
+    except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
+        session.fail(str(exc))
+    except KeyboardInterrupt:
+        interrupted = True
+    except Exception as exc:  # reported, then raised again: the run fails loudly
+        error = exc
+    return _Outcome(time.perf_counter() - wall_start, interrupted, error)
+
+
+def _report(cfg: SimRunConfig, run: _BuiltRun, outcome: _Outcome) -> dict[str, Any]:
     report: dict[str, Any] = {"scenario": cfg.scenario if cfg.input == "scripted" else cfg.input, "policy": cfg.policy, "seed": cfg.seed}
-    report |= session.report()
+    report |= run.session.report()
+    wall = outcome.wall_seconds
     report["wall_seconds"] = round(wall, 4)
     report["real_time_factor"] = round(report["sim_seconds"] / wall, 3) if wall > 0 else None
-    report["overruns"] = loop.overruns
-    report["final_base_position"] = [round(float(v), 4) for v in robot.read().base_pos]
-    report["interrupted"] = interrupted
-    if error is not None:
-        report["error"] = f"{type(error).__name__}: {error}"
+    report["overruns"] = run.loop.overruns
+    report["final_base_position"] = [round(float(v), 4) for v in run.robot.read().base_pos]
+    report["interrupted"] = outcome.interrupted
+    if outcome.error is not None:
+        report["error"] = f"{type(outcome.error).__name__}: {outcome.error}"
     return report
 
 

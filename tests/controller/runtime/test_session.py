@@ -39,6 +39,7 @@ def test_ticks_track_and_count(g1_model, assets, tmp_path: Path, linear_onnx) ->
     backend = DirectSimBackend(robot)
     with backend, standing() as source:
         session = Session(backend, tracker, source)
+        session.start()
         for k in range(25):
             backend.advance_to(session.start_time + k / tracker.rate_hz)
             assert session.tick()
@@ -55,6 +56,7 @@ def test_nonfinite_tracker_damps_and_the_session_says_when(g1_model, assets, tmp
     backend = DirectSimBackend(robot)
     with backend, standing() as source:
         session = Session(backend, tracker, source)
+        session.start()
         for k in range(6):
             backend.advance_to(session.start_time + k / tracker.rate_hz)
             session.tick()
