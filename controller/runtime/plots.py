@@ -6,6 +6,7 @@ for the rest of the process.
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +16,8 @@ from matplotlib.figure import Figure
 from controller.runtime.tracking_metrics import TrackingMetrics
 
 
-def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:
+def plot_tracking(metrics: TrackingMetrics, path: Path, title: str, damped: tuple[float, str] | None = None) -> None:
+    """Commanded and measured vx, vy and yaw rate over time; `damped` (time, reason) marks where and why the run damped."""
     t = np.asarray(metrics.times)
     cmd = np.asarray(metrics.commanded).reshape(-1, 3)
     meas = np.asarray(metrics.measured).reshape(-1, 3)
@@ -28,9 +30,13 @@ def plot_tracking(metrics: TrackingMetrics, path: Path, title: str) -> None:
         ax.plot(t, cmd[:, i], color="tab:red", linewidth=1.5, drawstyle="steps-post", label="commanded")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
+    if damped is not None:
+        for ax in axes:
+            ax.axvline(damped[0], color="black", linestyle="--", linewidth=1.0, label="damped")
+        fig.text(0.01, 0.005, textwrap.fill(f"damped at {damped[0]:.3f} s: {damped[1]}", 150), fontsize=8, va="bottom")
     axes[0].legend(loc="upper right")
     axes[0].set_title(title)
     axes[-1].set_xlabel("time (s)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.04 if damped is not None else 0.0, 1.0, 1.0))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)

@@ -184,8 +184,9 @@ def _report(cfg: SimRunConfig, run: _BuiltRun, outcome: _Outcome) -> dict[str, A
 def _write_outputs(cfg: SimRunConfig, session: Session, report: dict[str, Any]) -> None:
     plot_path = cfg.plot or (cfg.report.with_suffix(".png") if cfg.report else None)
     if plot_path is not None:  # also after a fault or an error: what was tracked until then
-        ended = f" (ended damped: {report['damp_reason']})" if session.ended_in_fault else ""
-        plot_tracking(session.metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured{ended}")
+        damp_time = report["damp_time"]
+        damped = (session.start_time + damp_time, report["damp_reason"]) if damp_time is not None else None
+        plot_tracking(session.metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured", damped)
         report["plot"] = str(plot_path)
     if cfg.report is not None:
         write_report(report, cfg.report)
