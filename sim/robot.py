@@ -53,6 +53,11 @@ class SimRobot(RobotInterface):
     def timestep(self) -> float:
         return float(self.model.opt.timestep)
 
+    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
+        """Lower and upper position limits (rad) of the joints, from the model, in `joint_names` order."""
+        ranges = np.array([self.model.jnt_range[self.model.joint(name).id] for name in self.joint_names])
+        return ranges[:, 0].copy(), ranges[:, 1].copy()
+
     def reset(self, joint_pos: FloatArray | None = None, yaw: float = 0.0) -> None:
         """Stand the robot at the origin in the default pose (or `joint_pos`), damped; time runs on."""
         t = self.data.time

@@ -19,7 +19,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim = sub.add_parser("sim", help="run a command scenario on the simulated G1")
     sim.add_argument("--scenario", default="walk_turn_stop", help="shipped scenario name or path to a scenario YAML")
     sim.add_argument("--policy", default="fastsac", help="policy preset name or path to a policy YAML")
-    sim.add_argument("--tracker", default="velocity", help="tracker by name (g1ctl scenarios lists them)")
+    sim.add_argument("--tracker", default=None, help="tracker by name (default: decoupled with --planner, else velocity)")
+    sim.add_argument("--planner", action="store_true", help="plan whole-body motion from the commands (replanned at 10 Hz) and track it")
     sim.add_argument("--duration", type=float, default=None, help="seconds of simulated time (default: the scenario's)")
     sim.add_argument("--seed", type=int, default=0)
     sim.add_argument("--input", default="scripted", choices=INPUTS)
@@ -44,7 +45,8 @@ def run(args: argparse.Namespace) -> int:
     from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415
 
     cfg = SimRunConfig(
-        scenario=args.scenario, policy=args.policy, tracker=args.tracker, duration=args.duration, seed=args.seed, input=args.input,
+        scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=args.planner, duration=args.duration, seed=args.seed,
+        input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
     )  # fmt: skip

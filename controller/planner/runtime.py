@@ -20,7 +20,7 @@ from controller.onnx_session import open_session
 from controller.planner import encoding as enc
 from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
-from controller.planner.request import Plan, PlanRequest, PlanRequestError
+from controller.planner.request import CONTEXT_FRAMES, Plan, PlanRequest, PlanRequestError
 from hw import g1
 from hw.errors import AssetError
 from hw.shipped import model_dir as model_dir_of
@@ -61,6 +61,10 @@ class Planner:
             raise AssetError(f"planner model in {folder} does not match this runtime ({wrong}, expected {expected}); retrain or update it")
         session = open_session(folder / spec["onnx"], AssetError, "planner ONNX", threads)
         return cls(session, spec, foot_lock, temperature)
+
+    def warm_up(self) -> None:
+        """One plan from standing: onnxruntime's first run costs tens of milliseconds, so do it before the control loop."""
+        self.plan(PlanRequest(context=np.tile(g1.standing_qpos(), (CONTEXT_FRAMES, 1))))
 
     def plan(self, request: PlanRequest) -> Plan:
         """One plan; raises PlanRequestError for an invalid request."""

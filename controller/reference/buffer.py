@@ -99,8 +99,8 @@ class ReferenceBuffer:
         with the new plan's weight k / crossfade_frames (lerp for root position and joints,
         slerp for the root quaternion) until the weight reaches 1: frame 0 is the old
         content, so the reference is continuous across the splice. The old content past
-        its last frame is that frame, held. A splice into an empty buffer takes the plan
-        as it is.
+        its last frame is that frame, held (a plan may start after the buffer ran out).
+        A splice into an empty buffer takes the plan as it is.
         """
         new = _checked_frames(frames, "plan")
         start_time = _finite_time(start_time, "plan start time")
@@ -114,15 +114,21 @@ class ReferenceBuffer:
                     "that part of the run is no longer held; start the plan later"
                 )
             if start_time > end + self.period * (1 + _GRID_EPS):
-                raise ReferenceBufferError(
-                    f"plan start time {start_time:.4f} s is beyond the buffer's end at {end:.4f} s plus one frame "
-                    f"({self.period:.4f} s): the tracker would have nothing to follow in between; reset or start earlier"
-                )
+                self._hold_until(start_time)
             new = self._crossfaded(new, start_time, crossfade_frames)
             self._cut(start_time)
         self._segments.append(_Segment(start_time, _read_only(new)))
         self._starts.append(start_time)
         self._drop_history(start_time - self.history_s)
+
+    def _hold_until(self, t: float) -> None:
+        """Fill the time up to `t` with the last frame held: what the tracker has been reading there anyway
+        (a plan that starts after the buffer ran out, e.g. the first plan after a reset or after failures)."""
+        last = self._qpos_at(self.end_time)
+        gap_start = self.end_time + self.period
+        count = max(math.ceil((t - gap_start) * self.fps - _GRID_EPS), 1)
+        self._segments.append(_Segment(gap_start, _read_only(np.tile(last, (count, 1)))))
+        self._starts.append(gap_start)
 
     def _crossfaded(self, new: FloatArray, start_time: float, crossfade_frames: int) -> FloatArray:
         """The new plan, sign-aligned with the old content and blended with it over its first frames."""

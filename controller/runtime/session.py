@@ -12,7 +12,7 @@ import time
 from typing import Any
 
 from controller.inputs.base import CommandSource
-from controller.reference.window import ReferenceWindow
+from controller.reference.source import CommandReference, ReferenceSource
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
 from controller.runtime.supervisor import Mode, Supervisor
@@ -21,10 +21,11 @@ from controller.tracking.tracker import Tracker
 
 
 class Session:
-    def __init__(self, backend: Backend, tracker: Tracker, source: CommandSource) -> None:
+    def __init__(self, backend: Backend, tracker: Tracker, source: CommandSource, reference: ReferenceSource | None = None) -> None:
         self.backend = backend
         self.tracker = tracker
         self.source = source
+        self.reference = reference or CommandReference()
         self.supervisor = Supervisor()
         self.metrics = TrackingMetrics()
         self.step_times: list[float] = []  # seconds per tracker step (observation + inference + command)
@@ -37,6 +38,7 @@ class Session:
         """Bring the backend up; run time counts from here (hardware: after the soft start)."""
         self.backend.start()
         self.start_time = self.backend.now()
+        self.reference.start(self.backend.robot.read())
 
     def tick(self) -> bool:
         """One control period; False when the run cannot go on (a fall that software cannot undo)."""
@@ -49,9 +51,9 @@ class Session:
             self.damp_time = round(state.time - self.start_time, 4)
         measured = backend.truth() or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
+        window = self.reference.window(state, velocity)
         t0 = time.perf_counter()
-        damping = supervisor.mode is Mode.DAMP
-        command = tracker.damping_command() if damping else tracker.step(state, ReferenceWindow(state.time, velocity))
+        command = tracker.damping_command() if supervisor.mode is Mode.DAMP else tracker.step(state, window)
         self.step_times.append(time.perf_counter() - t0)
         backend.robot.write(command)
         self.ticks += 1
@@ -61,6 +63,7 @@ class Session:
                 return False  # damped on purpose, or on hardware: nothing left to run
             tracker.reset()
             self.metrics.reset_reference()
+            self.reference.start(backend.robot.read())
         return True
 
     def fail(self, reason: str) -> None:
@@ -87,7 +90,7 @@ class Session:
             "estops": supervisor.estops,
             "input_losses": supervisor.input_losses,
         }
-        return report
+        return report | self.reference.report()
 
     @property
     def ended_in_fault(self) -> bool:

@@ -39,7 +39,8 @@ from sim.world import build_model
 class SimRunConfig:
     scenario: str = "walk_turn_stop"
     policy: str = "fastsac"
-    tracker: str = "velocity"
+    tracker: str | None = None  # None: "decoupled" with the planner, else "velocity"
+    planner: bool = False  # plan whole-body motion from the command (10 Hz replanning) and track the plan
     duration: float | None = None  # None: the scenario's duration
     seed: int = 0
     input: str = "scripted"
@@ -121,7 +122,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
     assets = ensure_assets(cfg.assets_dir)
     robot = SimRobot(build_model(assets.g1_mjcf))
     stack.callback(robot.close)
-    tracker = make_tracker(cfg.tracker, TrackerSpec(cfg.policy, assets, robot.joint_names))
+    tracker_name = cfg.tracker or ("decoupled" if cfg.planner else "velocity")
+    tracker = make_tracker(tracker_name, TrackerSpec(cfg.policy, assets, robot.joint_names))
     backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
     stack.callback(backend.close)
     source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
@@ -138,7 +140,17 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
         viewer = stack.enter_context(open_viewer(robot.model, robot.data))
     total = round(duration * tracker.rate_hz) if duration else None
     bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
-    return _BuiltRun(robot, Session(backend, tracker, source), RateLoop(clock, tracker.rate_hz), recorder, viewer, bar)
+    reference = None
+    if cfg.planner:
+        from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime session of the planner
+        from controller.reference.planned import PlannedReference  # noqa: PLC0415
+
+        planner = Planner.load()
+        planner.warm_up()
+        reference = PlannedReference(planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed)
+        stack.callback(reference.close)
+    session = Session(backend, tracker, source, reference)
+    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:

@@ -25,8 +25,16 @@ def _velocity(spec: TrackerSpec) -> Tracker:
     return load_policy(spec.policy, spec.assets, spec.robot_joint_names)
 
 
+def _decoupled(spec: TrackerSpec) -> Tracker:
+    from controller.tracking.decoupled import DecoupledTracker  # noqa: PLC0415
+    from controller.tracking.presets import load_policy  # noqa: PLC0415
+
+    return DecoupledTracker(load_policy(spec.policy, spec.assets, spec.robot_joint_names))
+
+
 TRACKERS: dict[str, Callable[[TrackerSpec], Tracker]] = {
     "velocity": _velocity,  # the velocity-command locomotion policy (holosoma's G1 loco policies)
+    "decoupled": _decoupled,  # planned motion: legs through the velocity policy, waist and arms from the plan
 }
 
 

@@ -1,0 +1,47 @@
+"""Smart locomotion requests: a velocity command becomes a plan request with a spring root target.
+
+MotionBricks' primitive: from the root state at the end of the context and the command,
+the critically damped spring of `root_spring` gives the root path over the next plan; the
+planner is asked to meet its position and heading at the plan's last frame, and fills in
+the whole-body motion (steps, arm swing) that gets there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from controller.inputs.base import ZERO, VelocityCommand
+from controller.planner.request import FPS, PlanRequest, target_root
+from controller.reference.root_spring import SpringConfig, root_state_from_frames, root_trajectory
+from hw.errors import ConfigError
+from hw.types import FloatArray
+
+
+@dataclass(frozen=True)
+class LocomotionConfig:
+    plan_frames: int = 44  # 1.47 s at 30 fps: a multiple of 4 in 24-64 (the planner contract)
+    spring: SpringConfig = field(default_factory=SpringConfig)
+
+    def __post_init__(self) -> None:
+        if self.plan_frames % 4 or not 24 <= self.plan_frames <= 64:
+            raise ConfigError(f"plan_frames must be a multiple of 4 from 24 to 64, got {self.plan_frames}")
+
+
+class SmartLocomotion:
+    """Holds the command in force and turns a context into the next plan request (`request`)."""
+
+    def __init__(self, cfg: LocomotionConfig = LocomotionConfig(), seed: int = 0) -> None:
+        self.cfg = cfg
+        self.command: VelocityCommand = ZERO
+        self._seed = seed
+        self._count = 0
+
+    def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
+        """The plan that continues `context` towards where the spring takes the root under the command."""
+        state = root_state_from_frames(context, FPS)
+        path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
+        last = self.cfg.plan_frames - 1
+        x, y = path.positions[last]
+        target = target_root(last, float(x), float(y), float(path.headings[last]))
+        self._count += 1  # every plan its own seed: reproducible for a run seed, varied over the run
+        return PlanRequest(context=context, keyframes=(target,), lengths=(self.cfg.plan_frames,), seed=self._seed * 100_003 + self._count)

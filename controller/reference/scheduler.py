@@ -1,0 +1,200 @@
+"""The replanning scheduler: plans asked for at 10 Hz off the control loop, spliced into the reference buffer.
+
+Every control tick calls `update(t, replan_now)`. The scheduler then
+
+- takes in the plan in flight when it is ready: checked (finite, the expected shape),
+  joint angles clamped to the limits, and spliced into the buffer at the time it was
+  asked for, a short look-ahead after the request, with a cross-fade; a plan that comes
+  back after that time is dropped and counted as late;
+- asks for the next plan when the period has passed or the caller says the command
+  changed (one plan in flight at a time), with the context read from the buffer being
+  executed at the splice time, so the new plan continues what the robot will be doing.
+
+Plans run on a worker thread (onnxruntime releases the GIL), so a tick never waits for
+one on the real-time clock. On the simulated clock a plan becomes available a configured
+latency after its request, in simulated time, whatever the machine's speed: the loop
+waits for the worker there, and runs stay reproducible for a seed. The real cost of
+every plan is recorded either way.
+
+A planner that raises, returns NaN or stalls past `stall_timeout_s` is a failure: it is
+logged and counted, the buffer being executed runs out, and the reference then holds
+its last pose (the tracker stands). A later plan may recover.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor, wait
+from dataclasses import dataclass
+
+import numpy as np
+
+from controller.planner.request import FPS, Plan, PlanRequest
+from controller.reference.buffer import ReferenceBuffer
+from hw import g1
+from hw.errors import ConfigError
+from hw.types import FloatArray
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class SchedulerConfig:
+    period_s: float = 0.1  # replanning period (10 Hz)
+    lookahead_s: float = 0.1  # a plan is spliced this long after it was asked for: its deadline
+    crossfade_frames: int = 3  # frames of the new plan blended into the old one at the splice
+    simulated_latency_s: float = 0.02  # simulated clock: a plan is ready this long after its request
+    stall_timeout_s: float = 1.0  # wall seconds a plan may take before it counts as failed
+
+    def __post_init__(self) -> None:
+        for name in ("period_s", "lookahead_s", "stall_timeout_s"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"scheduler {name} must be positive, got {getattr(self, name)}")
+        if not 0 <= self.simulated_latency_s < self.lookahead_s:
+            raise ConfigError(
+                f"scheduler simulated_latency_s ({self.simulated_latency_s}) must be in [0, lookahead_s = {self.lookahead_s}): "
+                "a plan slower than the look-ahead is always late"
+            )
+        if self.crossfade_frames < 0:
+            raise ConfigError(f"scheduler crossfade_frames must be >= 0, got {self.crossfade_frames}")
+
+
+@dataclass
+class SchedulerCounters:
+    requests: int = 0
+    replans: int = 0  # plans spliced into the buffer
+    late_plans: int = 0  # plans that came back after their splice time: dropped
+    planner_failures: int = 0  # raised, NaN, wrong shape, stalled
+    clamped_values: int = 0  # planned joint angles clamped to the limits
+
+
+@dataclass(frozen=True)
+class _InFlight:
+    future: Future[Plan]
+    requested_at: float  # run time of the request
+    splice_time: float  # run time of the plan's first frame
+    ready_at: float | None  # simulated clock: when the plan becomes available; None on the real-time clock
+    submitted_wall: float
+
+
+class ReplanScheduler:
+    """Keeps `buffer` filled with plans from `plan`, asked for with requests from `make_request`.
+
+    `make_request(context, splice_time)` builds the request for a plan whose frames follow
+    `context` (the last 4 frames of the buffer at `splice_time`): the command, targets and
+    keyframes are the caller's. `joint_limits` (lower, upper) in joint order clamp every plan.
+    """
+
+    def __init__(
+        self,
+        plan: Callable[[PlanRequest], Plan],
+        make_request: Callable[[FloatArray, float], PlanRequest],
+        buffer: ReferenceBuffer,
+        cfg: SchedulerConfig = SchedulerConfig(),
+        simulated_clock: bool = True,
+        joint_limits: tuple[FloatArray, FloatArray] | None = None,
+    ) -> None:
+        self._plan = plan
+        self._make_request = make_request
+        self.buffer = buffer
+        self.cfg = cfg
+        self.simulated_clock = simulated_clock
+        self._limits = None if joint_limits is None else (np.asarray(joint_limits[0], float), np.asarray(joint_limits[1], float))
+        self.counters = SchedulerCounters()
+        self.plan_latencies_s: list[float] = []  # real cost of every plan that came back
+        self.last_failure: str | None = None
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="planner")
+        self._in_flight: _InFlight | None = None
+        self._next_request = -math.inf
+
+    def update(self, t: float, replan_now: bool = False) -> None:
+        """One control tick at run time `t`: take in a finished plan, ask for the next one when due."""
+        if self._in_flight is not None:
+            self._collect(t)
+        if self._in_flight is None and (replan_now or t >= self._next_request - 1e-9):
+            self._request(t)
+
+    def _request(self, t: float) -> None:
+        splice_time = t + self.cfg.lookahead_s
+        try:
+            request = self._make_request(self.buffer.context(splice_time), splice_time)
+        except Exception as exc:  # a request that cannot be built is a planner failure, not a crash
+            self._fail(f"cannot build the plan request: {exc}")
+            self._next_request = t + self.cfg.period_s
+            return
+        ready_at = t + self.cfg.simulated_latency_s if self.simulated_clock else None
+        self._in_flight = _InFlight(self._executor.submit(self._plan, request), t, splice_time, ready_at, time.perf_counter())
+        self.counters.requests += 1
+        self._next_request = t + self.cfg.period_s
+
+    def _collect(self, t: float) -> None:
+        flight = self._in_flight
+        assert flight is not None
+        if flight.ready_at is not None:  # simulated clock: wait for the plan in wall time, not in simulated time
+            if t < flight.ready_at - 1e-9:
+                return
+            timeout = max(self.cfg.stall_timeout_s - (time.perf_counter() - flight.submitted_wall), 0.0)
+            if not wait([flight.future], timeout=timeout).done:
+                self._in_flight = None
+                self._fail(f"the planner stalled (no plan after {self.cfg.stall_timeout_s} s)")
+                self._restart_worker()
+                return
+        elif not flight.future.done():
+            if time.perf_counter() - flight.submitted_wall > self.cfg.stall_timeout_s:
+                self._in_flight = None
+                self._fail(f"the planner stalled (no plan after {self.cfg.stall_timeout_s} s)")
+                self._restart_worker()
+            return
+        self._in_flight = None
+        self.plan_latencies_s.append(time.perf_counter() - flight.submitted_wall)
+        error = flight.future.exception()
+        if error is not None:
+            self._fail(f"the planner raised {type(error).__name__}: {error}")
+            return
+        plan = flight.future.result()
+        frames = self._checked(plan)
+        if frames is None:
+            return
+        arrival = t if flight.ready_at is None else flight.ready_at
+        if arrival > flight.splice_time + 1e-9:
+            self.counters.late_plans += 1
+            log.warning(
+                "plan asked for at %.3f s came back at %.3f s, after its splice time %.3f s: dropped",
+                flight.requested_at,
+                t,
+                flight.splice_time,
+            )
+            return
+        self.buffer.splice(frames, flight.splice_time + 1.0 / FPS, self.cfg.crossfade_frames)
+        self.counters.replans += 1
+
+    def _checked(self, plan: Plan) -> FloatArray | None:
+        frames = np.asarray(plan.qpos, dtype=np.float64)
+        if frames.ndim != 2 or frames.shape[1] != g1.QPOS_SIZE or len(frames) == 0:
+            self._fail(f"the planner returned frames of shape {list(frames.shape)}, expected [N, {g1.QPOS_SIZE}]")
+            return None
+        if not np.isfinite(frames).all():
+            self._fail("the planner returned NaN or infinite values")
+            return None
+        if self._limits is not None:
+            joints = frames[:, g1.QPOS_JOINTS]
+            clamped = np.clip(joints, self._limits[0], self._limits[1])
+            self.counters.clamped_values += int(np.count_nonzero(clamped != joints))
+            frames[:, g1.QPOS_JOINTS] = clamped
+        return frames
+
+    def _fail(self, reason: str) -> None:
+        self.counters.planner_failures += 1
+        self.last_failure = reason
+        log.warning("planner failure %d: %s; the reference runs out, then holds its last pose", self.counters.planner_failures, reason)
+
+    def _restart_worker(self) -> None:
+        """A stalled plan keeps its thread busy: leave it behind and plan on a fresh worker."""
+        self._executor.shutdown(wait=False, cancel_futures=True)
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="planner")
+
+    def close(self) -> None:
+        self._executor.shutdown(wait=False, cancel_futures=True)

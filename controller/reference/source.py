@@ -1,0 +1,36 @@
+"""Where a run's reference comes from: the command itself, or the planner in the loop.
+
+The session asks its source for the window of each tick; it never knows which one runs.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import Any
+
+from controller.inputs.base import VelocityCommand
+from controller.reference.window import ReferenceWindow
+from hw.types import RobotState
+
+
+class ReferenceSource(abc.ABC):
+    def start(self, state: RobotState) -> None:  # noqa: B027 - optional: most sources need no starting pose
+        """The run begins with the robot in `state`."""
+
+    @abc.abstractmethod
+    def window(self, state: RobotState, velocity: VelocityCommand) -> ReferenceWindow:
+        """The reference of this tick, given the robot's state and the supervised velocity command."""
+
+    def report(self) -> dict[str, Any]:
+        """Counters for the run report."""
+        return {}
+
+    def close(self) -> None:  # noqa: B027 - optional: most sources hold nothing
+        """Release workers; safe twice."""
+
+
+class CommandReference(ReferenceSource):
+    """The velocity command itself is the reference (the velocity tracker's own input)."""
+
+    def window(self, state: RobotState, velocity: VelocityCommand) -> ReferenceWindow:
+        return ReferenceWindow(state.time, velocity)
