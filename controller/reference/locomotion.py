@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from controller.inputs.base import ZERO, VelocityCommand
 from controller.planner.request import FPS, PlanRequest, target_root
-from controller.reference.root_spring import SpringConfig, root_state_from_frames, root_trajectory
+from controller.reference.root_spring import RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
 from hw.errors import ConfigError
 from hw.types import FloatArray
 
@@ -35,11 +35,24 @@ class SmartLocomotion:
         self.command: VelocityCommand = ZERO
         self._seed = seed
         self._count = 0
+        self.path: RootTrajectory | None = None  # the root path of the latest request
+        self.path_start = 0.0  # run time of the path's frame 0 is path_start + 1/fps
+
+    def path_velocity(self, t: float) -> VelocityCommand | None:
+        """The latest requested root path's velocity at run time `t`, in its heading frame (None: no path covers t)."""
+        if self.path is None:
+            return None
+        k = round((t - self.path_start) * FPS) - 1
+        if not 0 <= k < self.path.length:
+            return None
+        vx, vy = self.path.local_velocity(k)
+        return VelocityCommand(vx, vy, float(self.path.yaw_rates[k]))
 
     def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         """The plan that continues `context` towards where the spring takes the root under the command."""
         state = root_state_from_frames(context, FPS)
         path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
+        self.path, self.path_start = path, splice_time
         last = self.cfg.plan_frames - 1
         x, y = path.positions[last]
         target = target_root(last, float(x), float(y), float(path.headings[last]))

@@ -31,6 +31,7 @@ class PlannedReferenceConfig:
     locomotion: LocomotionConfig = field(default_factory=LocomotionConfig)
     scheduler: SchedulerConfig = field(default_factory=SchedulerConfig)
     lead_s: float = 0.5  # the tracker takes the planned root's mean velocity over this much of the plan ahead
+    path_lead_s: float = 0.1  # ... or the root path's velocity this far ahead
     command_change: float = 0.1  # m/s or rad/s: a change this large asks for a plan at once
 
 
@@ -66,7 +67,13 @@ class PlannedReference(ReferenceSource):
             self._last_command = velocity
         self.locomotion.command = velocity
         self.scheduler.update(t, replan_now=changed)
-        return ReferenceWindow(t, velocity, plan=self.buffer.sample(t), ahead=self.buffer.sample(t + self.cfg.lead_s))
+        return ReferenceWindow(
+            t,
+            velocity,
+            plan=self.buffer.sample(t),
+            ahead=self.buffer.sample(t + self.cfg.lead_s),
+            path_velocity=self.locomotion.path_velocity(t + self.cfg.path_lead_s),
+        )
 
     def report(self) -> dict[str, Any]:
         c = self.scheduler.counters

@@ -26,3 +26,4 @@ class ReferenceWindow:
     velocity: VelocityCommand
     plan: ReferenceSample | None = None  # the planned motion at `time` (None: no planner in the loop)
     ahead: ReferenceSample | None = None  # the planned motion a little later: what the robot should move towards
+    path_velocity: VelocityCommand | None = None  # the planned root path's velocity (heading frame) a little ahead

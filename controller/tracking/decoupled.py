@@ -1,9 +1,9 @@
 """The decoupled tracker: the legs follow the plan through the locomotion policy, the upper body its joint angles.
 
 As in GR00T's decoupled whole-body controller: the velocity-command policy keeps the
-robot balanced and walking, commanded with the planned root's mean velocity over the
-next half second (in the planned heading frame); the arms take the planned joint angles
-directly, limited to a per-tick step. The policy sees those joints as if they tracked its
+robot balanced and walking (commanded as `legs_follow` says: by default the velocity
+command the plan follows too); the arms take the planned joint angles directly, limited
+to a per-tick step. The policy sees those joints as if they tracked its
 own targets (as in dataset recording), so arm motion it was not trained with does not
 unsettle its gait. The waist stays with the policy by default: with the planned waist
 angles too, `walk_turn_stop` fell 4-6 times in 20 s; with the arms only, not once.
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Literal
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from controller.reference.window import ReferenceWindow
 from controller.tracking.tracker import Tracker
 from controller.tracking.velocity_policy import VelocityPolicy
 from hw import g1, quat
+from hw.errors import ConfigError
 from hw.types import JointCommand, RobotState, read_only
 
 
@@ -28,6 +30,16 @@ from hw.types import JointCommand, RobotState, read_only
 class DecoupledConfig:
     planned_joints: tuple[str, ...] = g1.ARM_JOINTS  # joints that take the plan's angles (g1.UPPER_BODY_JOINTS adds the waist)
     max_step: float = 0.05  # rad per tick (2.5 rad/s at 50 Hz): the most a planned joint's target moves in one tick
+    # What the legs' policy is commanded with: "command" (the supervised velocity command, which the
+    # plan follows too), "path" (the spring root path's velocity a little ahead) or "plan" (the plan's
+    # mean root velocity over the next half second). Measured on random_commands, 60 s, seed 1: velocity
+    # error 0.426 / 0.514 / 0.500 m/s against 0.412 without the planner; in velocity mode the command
+    # is what the user asked for, the path is for modes that ask for a place (waypoints).
+    legs_follow: Literal["command", "path", "plan"] = "command"
+
+    def __post_init__(self) -> None:
+        if self.legs_follow not in ("command", "path", "plan"):
+            raise ConfigError(f"legs_follow must be 'command', 'path' or 'plan', got '{self.legs_follow}'")
 
 
 class DecoupledTracker(Tracker):
@@ -59,7 +71,7 @@ class DecoupledTracker(Tracker):
     def step(self, state: RobotState, reference: ReferenceWindow) -> JointCommand:
         if reference.plan is None or reference.ahead is None:
             return self.legs.step(state, reference)  # no plan in the loop: plain velocity tracking
-        velocity = self.command_limits.clamp(_heading_frame_velocity(reference))
+        velocity = self.command_limits.clamp(self._legs_command(reference))
         legs_cmd = self.legs.step(self._as_tracked(state), replace(reference, velocity=velocity))
         if self.legs.latched_fault is not None:
             return legs_cmd
@@ -71,6 +83,13 @@ class DecoupledTracker(Tracker):
         q = np.array(legs_cmd.q)
         q[self.upper] = target
         return JointCommand(q=read_only(q), dq=legs_cmd.dq, kp=legs_cmd.kp, kd=legs_cmd.kd, tau_ff=legs_cmd.tau_ff)
+
+    def _legs_command(self, reference: ReferenceWindow) -> VelocityCommand:
+        if self.cfg.legs_follow == "path" and reference.path_velocity is not None:
+            return reference.path_velocity
+        if self.cfg.legs_follow == "plan":
+            return _heading_frame_velocity(reference)
+        return reference.velocity
 
     def _as_tracked(self, state: RobotState) -> RobotState:
         """The state with the upper body where the policy last aimed it, at rest: what it was trained to see."""

@@ -100,3 +100,16 @@ def test_nonpositive_duration() -> None:
 def test_viewer_without_a_display_is_one_line() -> None:
     line = one_line_error(g1ctl("sim", "--viewer", "--duration", "0.1", env={"DISPLAY": "", "WAYLAND_DISPLAY": ""}))
     assert "needs a display" in line and "--video" in line
+
+
+@pytest.mark.slow
+def test_walking_through_the_planner_in_the_loop(tmp_path: Path) -> None:
+    report_path = tmp_path / "planned.json"
+    result = g1ctl("sim", "--scenario", "walk_turn_stop", "--planner", "--duration", "4", "--report", str(report_path))
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["tracker"] == "decoupled" and report["falls"] == 0
+    assert report["replans"] >= 35 and report["late_plans"] == 0 and report["planner_failures"] == 0
+    assert set(report["plan_latency_ms"]) == {"p50", "p99"}
+    assert report["final_base_position"][0] > 0.5  # 3 s at up to 0.5 m/s forward, springing up to speed
+    assert "unknown tracker 'wholebody'" in one_line_error(g1ctl("sim", "--planner", "--tracker", "wholebody"))
