@@ -37,6 +37,7 @@ class CommandSample:
     velocity: VelocityCommand = VelocityCommand()
     buttons: Buttons = Buttons()
     alive: bool = True
+    gesture: str = ""  # an upper-body gesture asked for (a name of motion_data.dataset.GESTURES); "" for none
 
 
 ZERO = VelocityCommand()

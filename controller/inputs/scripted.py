@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
+from controller.motion_data.dataset import GESTURES
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import load_config, preset_names
@@ -16,13 +17,27 @@ from hw.yamlconfig import load_config, preset_names
 
 @dataclass(frozen=True)
 class ScenarioStep:
-    """From time `t` (s) on, command this velocity until the next step."""
+    """From time `t` (s) on, command this velocity (and this upper-body gesture) until the next step."""
 
     t: float
     vx: float = 0.0
     vy: float = 0.0
     yaw_rate: float = 0.0
     label: str = ""
+    gesture: str = ""  # one of motion_data.dataset.GESTURES (not "none"); "" for none
+
+    def __post_init__(self) -> None:
+        if self.gesture and (self.gesture not in GESTURES or self.gesture == "none"):
+            raise ValueError(f"unknown gesture '{self.gesture}' (valid: {', '.join(g for g in GESTURES if g != 'none')})")
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """A root pose to go to: position (m, world frame) and heading (degrees, counter-clockwise from +x)."""
+
+    x: float
+    y: float
+    heading_deg: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -46,12 +61,15 @@ class Scenario:
     description: str = ""
     steps: tuple[ScenarioStep, ...] = ()
     random: RandomProgram | None = None
+    waypoints: tuple[Waypoint, ...] = ()  # go to each in order, settling at each (planner runs); steps may add gestures
 
     def __post_init__(self) -> None:
         if self.duration <= 0:
             raise ValueError(f"duration must be positive, got {self.duration}")
-        if bool(self.steps) == (self.random is not None):
-            raise ValueError("give exactly one of 'steps' or 'random'")
+        if self.random is not None and (self.steps or self.waypoints):
+            raise ValueError("'random' goes alone: no 'steps' or 'waypoints' with it")
+        if self.random is None and not (self.steps or self.waypoints):
+            raise ValueError("give 'steps', 'random' or 'waypoints'")
         times = [s.t for s in self.steps]
         if times and (times[0] != 0.0 or times != sorted(times)):
             raise ValueError("steps must start at t: 0 and be in time order")
@@ -102,12 +120,15 @@ class ScriptedSource(CommandSource):
     """Plays a timeline of steps on the run loop's clock."""
 
     def __init__(self, steps: tuple[ScenarioStep, ...], limits: CommandLimits | None = None) -> None:
-        self.steps = steps
-        self._times = [s.t for s in steps]
-        self._commands = [(limits.clamp(c) if limits else c) for c in (VelocityCommand(s.vx, s.vy, s.yaw_rate) for s in steps)]
+        self.steps = steps or (ScenarioStep(t=0.0, label="stand"),)
+        self._times = [s.t for s in self.steps]
+        commands = (VelocityCommand(s.vx, s.vy, s.yaw_rate) for s in self.steps)
+        self._samples = [
+            CommandSample(velocity=limits.clamp(c) if limits else c, gesture=s.gesture) for c, s in zip(commands, self.steps, strict=True)
+        ]
 
     def step_index(self, now: float) -> int:
         return max(bisect.bisect_right(self._times, now + 1e-9) - 1, 0)
 
     def poll(self, now: float) -> CommandSample:
-        return CommandSample(velocity=self._commands[self.step_index(now)])
+        return self._samples[self.step_index(now)]
