@@ -251,6 +251,7 @@ class HardwareRobot(RobotInterface):
             base_ang_vel=gyro,
             base_pos=np.zeros(3),  # no estimator on hardware yet
             base_lin_vel=np.zeros(3),
+            has_base_position=False,
         )
 
     def cycle(self) -> None:

@@ -27,6 +27,7 @@ class RobotState:
     base_ang_vel: FloatArray
     base_pos: FloatArray
     base_lin_vel: FloatArray
+    has_base_position: bool = True  # False where nothing estimates base_pos/base_lin_vel (they read zero)
 
 
 def read_only(values: FloatArray) -> FloatArray:

@@ -13,10 +13,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from controller.runtime.tracking_metrics import TrackingMetrics
+from controller.runtime.tracking_metrics import PlanTrackingMetrics, TrackingMetrics
 
 
-def plot_tracking(metrics: TrackingMetrics, path: Path, title: str, damped: tuple[float, str] | None = None) -> None:
+def plot_tracking(
+    metrics: TrackingMetrics, path: Path, title: str, damped: tuple[float, str] | None = None, planned: PlanTrackingMetrics | None = None
+) -> None:
     """Commanded and measured vx, vy and yaw rate over time; `damped` (time, reason) marks where and why the run damped."""
     t = np.asarray(metrics.times)
     cmd = np.asarray(metrics.commanded).reshape(-1, 3)
@@ -28,6 +30,8 @@ def plot_tracking(metrics: TrackingMetrics, path: Path, title: str, damped: tupl
     for i, (ax, label) in enumerate(zip(axes, labels, strict=True)):
         ax.plot(t, meas[:, i], color="tab:blue", linewidth=0.8, label="measured")
         ax.plot(t, cmd[:, i], color="tab:red", linewidth=1.5, drawstyle="steps-post", label="commanded")
+        if planned is not None and planned.times:
+            ax.plot(planned.times, np.asarray(planned.planned)[:, i], color="tab:green", linewidth=1.0, label="planned")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     if damped is not None:

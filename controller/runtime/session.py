@@ -16,7 +16,7 @@ from controller.reference.source import CommandReference, ReferenceSource
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
 from controller.runtime.supervisor import Mode, Supervisor
-from controller.runtime.tracking_metrics import TrackingMetrics
+from controller.runtime.tracking_metrics import PlanTrackingMetrics, TrackingMetrics, command_response_s
 from controller.tracking.tracker import Tracker
 
 
@@ -28,6 +28,7 @@ class Session:
         self.reference = reference or CommandReference()
         self.supervisor = Supervisor()
         self.metrics = TrackingMetrics()
+        self.plan_metrics = PlanTrackingMetrics()
         self.step_times: list[float] = []  # seconds per tracker step (observation + inference + command)
         self.falls: list[float] = []  # run time of each fall
         self.damp_time: float | None = None  # run time at which the robot was last put into damping
@@ -52,6 +53,8 @@ class Session:
         measured = backend.truth() or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
         window = self.reference.window(state, velocity)
+        if window.plan is not None and supervisor.mode is not Mode.DAMP:
+            self.plan_metrics.record(state.time, measured, window.plan)
         t0 = time.perf_counter()
         command = tracker.damping_command() if supervisor.mode is Mode.DAMP else tracker.step(state, window)
         self.step_times.append(time.perf_counter() - t0)
@@ -83,6 +86,7 @@ class Session:
             "velocity_error_mean": round(self.metrics.velocity_error_mean, 4),
             "yaw_rate_error_mean": round(self.metrics.yaw_rate_error_mean, 4),
             "policy_step_ms": percentiles_ms(self.step_times),
+            "command_response_s": _rounded(command_response_s(self.metrics.times, self.metrics.commanded, self.metrics.measured)[0]),
             "nonfinite_actions": self.tracker.nonfinite_events,
             "final_mode": supervisor.mode.value,
             "damp_reason": supervisor.damp_reason,
@@ -90,8 +94,14 @@ class Session:
             "estops": supervisor.estops,
             "input_losses": supervisor.input_losses,
         }
+        if self.plan_metrics.times:
+            report |= self.plan_metrics.report()
         return report | self.reference.report()
 
     @property
     def ended_in_fault(self) -> bool:
         return self.supervisor.mode is Mode.DAMP and self.supervisor.damp_reason.startswith("fault")
+
+
+def _rounded(value: float) -> float | None:
+    return None if value != value else round(value, 3)  # NaN (nothing to measure) reads as null in JSON

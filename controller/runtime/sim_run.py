@@ -198,7 +198,8 @@ def _write_outputs(cfg: SimRunConfig, session: Session, report: dict[str, Any]) 
     if plot_path is not None:  # also after a fault or an error: what was tracked until then
         damp_time = report["damp_time"]
         damped = (session.start_time + damp_time, report["damp_reason"]) if damp_time is not None else None
-        plot_tracking(session.metrics, plot_path, f"{report['scenario']} / {cfg.policy}: commanded vs measured", damped)
+        title = f"{report['scenario']} / {cfg.policy}: commanded vs measured"
+        plot_tracking(session.metrics, plot_path, title, damped, session.plan_metrics)
         report["plot"] = str(plot_path)
     if cfg.report is not None:
         write_report(report, cfg.report)
