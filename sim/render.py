@@ -51,8 +51,32 @@ def render_picture(model: mujoco.MjModel, data: mujoco.MjData, path: Path, width
         renderer.close()
 
 
+class Ghost:
+    """A translucent copy of the G1 at a reference pose (the plan being tracked), added to a scene.
+
+    Drawn beside the real robot in videos and in the viewer, so a person sees at once
+    where the tracker is asked to go and how far the robot is from it.
+    """
+
+    def __init__(self, model: mujoco.MjModel, rgba: tuple[float, float, float, float] = (0.25, 0.85, 0.35, 0.35)) -> None:
+        self.model = model
+        self.data = mujoco.MjData(model)
+        self._option = mujoco.MjvOption()
+        self._perturb = mujoco.MjvPerturb()
+        self._rgba = np.array(rgba, dtype=np.float32)
+
+    def add_to(self, scene: mujoco.MjvScene, qpos: np.ndarray) -> None:
+        self.data.qpos[:] = qpos
+        mujoco.mj_kinematics(self.model, self.data)
+        first = scene.ngeom
+        mujoco.mjv_addGeoms(self.model, self.data, self._option, self._perturb, mujoco.mjtCatBit.mjCAT_DYNAMIC, scene)
+        for i in range(first, scene.ngeom):
+            scene.geoms[i].rgba[:] = self._rgba
+
+
 class VideoRecorder:
-    """Captures frames from a tracking camera at `fps` of simulated time and writes them on close."""
+    """Captures frames from a tracking camera at `fps` of simulated time and writes them on close;
+    a `ghost_qpos` given to `maybe_capture` is drawn as a translucent robot beside the real one."""
 
     def __init__(self, model: mujoco.MjModel, path: Path, fps: int = 25, width: int = 640, height: int = 480) -> None:
         if path.suffix.lower() not in (".mp4", ".gif"):
@@ -69,12 +93,15 @@ class VideoRecorder:
             self._writer = imageio.get_writer(str(path), mode="I", duration=1000.0 / fps, loop=0)
         self._open = True
         self.frames = 0
+        self._ghost = Ghost(model)
 
-    def maybe_capture(self, data: mujoco.MjData) -> None:
+    def maybe_capture(self, data: mujoco.MjData, ghost_qpos: np.ndarray | None = None) -> None:
         """Capture a frame when simulated time has reached the next frame time."""
         if data.time + 1e-9 < self._next_t:
             return
         self._renderer.update_scene(data, camera=self._camera)
+        if ghost_qpos is not None:
+            self._ghost.add_to(self._renderer.scene, ghost_qpos)
         frame = self._renderer.render()
         self._writer.append_data(frame)
         self.frames += 1

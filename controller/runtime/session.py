@@ -13,6 +13,7 @@ from typing import Any
 
 from controller.inputs.base import CommandSource
 from controller.reference.source import CommandReference, ReferenceSource
+from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
 from controller.runtime.supervisor import Mode, Supervisor
@@ -34,6 +35,7 @@ class Session:
         self.damp_time: float | None = None  # run time at which the robot was last put into damping
         self.start_time = backend.now()
         self.ticks = 0
+        self.last_window: ReferenceWindow | None = None  # for displays: the plan being tracked, the command
 
     def start(self) -> None:
         """Bring the backend up; run time counts from here (hardware: after the soft start)."""
@@ -53,6 +55,7 @@ class Session:
         measured = backend.truth() or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
         window = self.reference.window(state, velocity)
+        self.last_window = window
         if window.plan is not None and supervisor.mode is not Mode.DAMP:
             self.plan_metrics.record(state.time, measured, window.plan)
         t0 = time.perf_counter()

@@ -81,6 +81,7 @@ class _BuiltRun:
     recorder: Any  # sim.render.VideoRecorder, when a video is asked for
     viewer: Any  # MuJoCo's passive viewer, with --viewer
     bar: tqdm[Any]
+    ghost: Any = None  # sim.render.Ghost drawing the plan in the viewer
 
 
 @dataclass(frozen=True)
@@ -140,17 +141,31 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
         viewer = stack.enter_context(open_viewer(robot.model, robot.data))
     total = round(duration * tracker.rate_hz) if duration else None
     bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
-    reference = None
+    from controller.reference.source import ReferenceSource  # noqa: PLC0415
+    from controller.reference.waypoints import WaypointFollower, WaypointReference  # noqa: PLC0415
+
+    reference: ReferenceSource | None = None
+    waypoints = load_scenario(cfg.scenario).waypoints if cfg.input == "scripted" else ()
+    follower = WaypointFollower(waypoints, limits=tracker.command_limits) if waypoints else None
     if cfg.planner:
         from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime session of the planner
         from controller.reference.planned import PlannedReference  # noqa: PLC0415
 
         planner = Planner.load()
         planner.warm_up()
-        reference = PlannedReference(planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed)
+        reference = PlannedReference(
+            planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed, follower=follower
+        )
         stack.callback(reference.close)
+    elif follower is not None:
+        reference = WaypointReference(follower)
     session = Session(backend, tracker, source, reference)
-    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar)
+    ghost = None
+    if viewer is not None and reference is not None:
+        from sim.render import Ghost  # noqa: PLC0415
+
+        ghost = Ghost(robot.model)
+    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
@@ -162,10 +177,12 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
         session.start()
         for tick in run.loop.run(duration):
             going_on = session.tick()
+            window = session.last_window
+            ghost = window.plan.qpos if window is not None and window.plan is not None else None
             if run.recorder is not None:
-                run.recorder.maybe_capture(run.robot.data)
+                run.recorder.maybe_capture(run.robot.data, ghost)
             if run.viewer is not None:
-                run.viewer.sync()
+                _sync_viewer(run.viewer, run.ghost, ghost)
             if tick % 10 == 9:
                 run.bar.update(10)
             if not going_on:
@@ -177,6 +194,15 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
     except Exception as exc:  # reported, then raised again: the run fails loudly
         error = exc
     return _Outcome(time.perf_counter() - wall_start, interrupted, error)
+
+
+def _sync_viewer(viewer: Any, ghost: Any, qpos: Any) -> None:
+    """Show the new physics state, with the plan's pose as a ghost when there is one."""
+    if ghost is not None and qpos is not None:
+        with viewer.lock():
+            viewer.user_scn.ngeom = 0
+            ghost.add_to(viewer.user_scn, qpos)
+    viewer.sync()
 
 
 def _report(cfg: SimRunConfig, run: _BuiltRun, outcome: _Outcome) -> dict[str, Any]:
