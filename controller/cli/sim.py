@@ -11,8 +11,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from controller.inputs.registry import INPUTS
+
+if TYPE_CHECKING:
+    from controller.runtime.sim_run import SimRunConfig
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -34,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
     sim.add_argument("--progress", action="store_true", help="show a progress bar")
+    sim.add_argument("--status", action="store_true", help="a live status line on stderr: mode, command, measured velocity, plan latency")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,22 +47,31 @@ def run(args: argparse.Namespace) -> int:
 
         use_headless_gl()  # before MuJoCo is imported, which fixes its OpenGL backend
     from controller.runtime.sim_run import SimRunConfig  # noqa: PLC0415 - imports MuJoCo
-    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415
 
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=args.planner, duration=args.duration, seed=args.seed,
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
+        status=args.status,
     )  # fmt: skip
+    return run_and_summarize(cfg)
+
+
+def run_and_summarize(cfg: SimRunConfig) -> int:
+    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault."""
+    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
+
     report = run_sim(cfg)
     summary_keys = ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
     print(json.dumps({k: report[k] for k in summary_keys}))
+    if "plan_latency_ms" in report:
+        print(json.dumps({k: report[k] for k in ("plan_latency_ms", "replans", "late_plans", "planner_failures") if k in report}))
     for key in ("video", "picture", "plot"):
         if key in report:
             print(f"{key}: {report[key]}")
-    if args.report:
-        print(f"report: {args.report}")
+    if cfg.report:
+        print(f"report: {cfg.report}")
     if "hw" in report:
         hw = report["hw"]
         print(json.dumps({"hw": {k: hw[k] for k in ("cycle_ms", "frames_sent", "frames_received", "dropped", "crc_errors", "faults")}}))

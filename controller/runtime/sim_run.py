@@ -28,6 +28,7 @@ from controller.runtime.loop import RateLoop, RealtimeSimulationClock, Simulatio
 from controller.runtime.plots import plot_tracking
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend, SimulatedHardwareBackend
+from controller.runtime.status import StatusLine
 from controller.tracking.registry import TrackerSpec, make_tracker
 from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_hardware_config
@@ -55,6 +56,7 @@ class SimRunConfig:
     hardware: str | None = None  # a hardware config: drive the sim through its codecs and buses
     faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
     picture: Path | None = None  # PNG of the final frame
+    status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
 
 
 def _check(cfg: SimRunConfig) -> float | None:
@@ -82,6 +84,7 @@ class _BuiltRun:
     viewer: Any  # MuJoCo's passive viewer, with --viewer
     bar: tqdm[Any]
     ghost: Any = None  # sim.render.Ghost drawing the plan in the viewer
+    status: StatusLine | None = None
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,11 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
         from sim.render import Ghost  # noqa: PLC0415
 
         ghost = Ghost(robot.model)
-    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost)
+    status = None
+    if cfg.status:
+        status = StatusLine(sys.stderr)
+        stack.callback(status.close)
+    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost, status)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
@@ -183,6 +190,8 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
                 run.recorder.maybe_capture(run.robot.data, ghost)
             if run.viewer is not None:
                 _sync_viewer(run.viewer, run.ghost, ghost)
+            if run.status is not None:
+                run.status.update(session)
             if tick % 10 == 9:
                 run.bar.update(10)
             if not going_on:

@@ -113,3 +113,12 @@ def test_walking_through_the_planner_in_the_loop(tmp_path: Path) -> None:
     assert set(report["plan_latency_ms"]) == {"p50", "p99"}
     assert report["final_base_position"][0] > 0.5  # 3 s at up to 0.5 m/s forward, springing up to speed
     assert "unknown tracker 'wholebody'" in one_line_error(g1ctl("sim", "--planner", "--tracker", "wholebody"))
+
+
+@pytest.mark.slow
+def test_run_headless_without_a_terminal_plays_the_scenario_through_the_planner(tmp_path: Path) -> None:
+    report_path = tmp_path / "run.json"
+    result = g1ctl("run", "--duration", "2", "--report", str(report_path), env={"DISPLAY": "", "WAYLAND_DISPLAY": ""})
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["scenario"] == "walk_turn_stop" and report["tracker"] == "decoupled" and report["replans"] >= 15

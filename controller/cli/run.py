@@ -1,0 +1,78 @@
+"""`g1ctl run`: drive the simulated G1 through the planner, the way a person would.
+
+g1ctl run [--input auto|keyboard|gamepad|scripted] [--scenario walk_turn_stop] [--video runs/run.mp4]
+          [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can] [--duration S] [--headless]
+
+With a display: MuJoCo's viewer, the planned motion drawn as a ghost beside the robot, held
+to the wall clock. Without one: headless. `--input auto` takes a gamepad when one is plugged
+in, else the keyboard when this is a terminal, else the scenario's scripted timeline. In a
+terminal one status line shows the mode, the command, the measured velocity and the plan
+latency. `--video` records either way (with the ghost).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from controller.inputs.registry import INPUTS
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    run = sub.add_parser("run", help="drive the simulated G1 through the planner: viewer or headless, keyboard, gamepad or a scenario")
+    run.add_argument("--input", default="auto", choices=("auto", *INPUTS), help="auto: gamepad, else keyboard in a terminal, else scripted")
+    run.add_argument("--scenario", default="walk_turn_stop", help="with scripted input: shipped scenario name or YAML path")
+    run.add_argument("--video", type=Path, default=None, help="also record an .mp4 or .gif (with the planned ghost)")
+    run.add_argument("--no-planner", action="store_true", help="track the command directly, without the planner")
+    run.add_argument("--tracker", default=None, help="tracker by name (default: decoupled with the planner, else velocity)")
+    run.add_argument("--policy", default="fastsac", help="locomotion policy preset or YAML")
+    run.add_argument("--hardware", default=None, help="through simulated hardware (sim-can, sim-mixed)")
+    run.add_argument("--duration", type=float, default=None, help="seconds (default: the scenario's; interactive: until Ctrl-C)")
+    run.add_argument("--headless", action="store_true", help="no viewer even where a display exists")
+    run.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
+    run.add_argument("--seed", type=int, default=0)
+
+
+def run(args: argparse.Namespace) -> int:
+    viewer = not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if args.video is not None or not viewer:
+        from sim import use_headless_gl  # noqa: PLC0415
+
+        use_headless_gl()
+    from controller.cli.sim import run_and_summarize  # noqa: PLC0415
+    from controller.runtime.sim_run import SimRunConfig  # noqa: PLC0415 - imports MuJoCo
+
+    source = _choose_input(args.input)
+    cfg = SimRunConfig(
+        scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
+        seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
+        assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(),
+    )  # fmt: skip
+    if source != "scripted":
+        print(f"g1ctl run: {source} input, {'viewer' if viewer else 'headless'}; Ctrl-C ends the run", file=sys.stderr)
+    return run_and_summarize(cfg)
+
+
+def _choose_input(choice: str) -> str:
+    if choice != "auto":
+        return choice
+    if _gamepad_present():
+        return "gamepad"
+    return "keyboard" if sys.stdin.isatty() else "scripted"
+
+
+def _gamepad_present() -> bool:
+    try:
+        import evdev  # noqa: PLC0415 - Linux only
+    except ImportError:
+        return False
+    from controller.inputs.gamepad import find_gamepad  # noqa: PLC0415
+    from hw.errors import InputDeviceError  # noqa: PLC0415
+
+    try:
+        find_gamepad(evdev).close()
+    except InputDeviceError:
+        return False
+    return True
