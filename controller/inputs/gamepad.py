@@ -24,7 +24,7 @@ from hw.errors import InputDeviceError
 log = logging.getLogger(__name__)
 
 EV_SYN, EV_KEY, EV_ABS = 0, 1, 3
-BTN_SOUTH, BTN_EAST, BTN_SELECT, BTN_START = 304, 305, 314, 315
+BTN_SOUTH, BTN_EAST, BTN_NORTH, BTN_WEST, BTN_TL, BTN_SELECT, BTN_START = 304, 305, 307, 308, 310, 314, 315
 ABS_X, ABS_Y, ABS_RX = 0, 1, 3
 
 READ_POLL_S = 0.05  # the reader waits for events this long at a time, then looks whether it should stop
@@ -57,6 +57,8 @@ class GamepadConfig:
     button_start: int = BTN_START
     button_stop: int = BTN_SOUTH
     button_estop: int = BTN_EAST
+    # Held to make an upper-body gesture with the planner (first held one wins): X wave, Y raise both arms, LB point.
+    gesture_buttons: tuple[tuple[int, str], ...] = ((BTN_WEST, "wave"), (BTN_NORTH, "raise_both"), (BTN_TL, "point"))
     deadzone: float = 0.1
     stale_timeout: float = 0.5  # s without events while a stick is deflected
 
@@ -123,7 +125,8 @@ def map_gamepad(state: GamepadState, cfg: GamepadConfig, limits: CommandLimits, 
     if not connected or stale:
         return CommandSample(buttons=buttons, alive=False)
     velocity = VelocityCommand(_scale(sx, limits.vx), _scale(sy, limits.vy), _scale(syaw, limits.yaw_rate))
-    return CommandSample(velocity=velocity, buttons=buttons, alive=True)
+    gesture = next((name for code, name in cfg.gesture_buttons if code in state.buttons), "")
+    return CommandSample(velocity=velocity, buttons=buttons, alive=True, gesture=gesture)
 
 
 def find_gamepad(evdev: Any) -> Any:

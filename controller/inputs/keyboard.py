@@ -28,24 +28,28 @@ READ_POLL_S = 0.05  # the reader waits for a key this long at a time, then looks
 MAX_CONSECUTIVE_READ_ERRORS = 3
 JOIN_TIMEOUT_S = 1.0
 
-HELP = "keys: W/S fwd/back  A/D left/right  Q/E turn  space zero  Enter start  X stop  Esc/K e-stop"
+HELP = "keys: W/S fwd/back  A/D left/right  Q/E turn  space zero  Enter start  X stop  Esc/K e-stop  1 wave 2 raise 3 point (again: end)"
+GESTURE_KEYS = {"1": "wave", "2": "raise_both", "3": "point"}  # a terminal sends no key release: a second press ends it
 
 
 @dataclass(frozen=True)
 class KeyboardState:
     velocity: VelocityCommand = field(default_factory=VelocityCommand)
     buttons: Buttons = field(default_factory=Buttons)
+    gesture: str = ""
 
 
 def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float = 0.1) -> KeyboardState:
     """The state after one key press; unknown keys change nothing. Buttons latch until the next key."""
     v = state.velocity
     k = key.lower()
+    if k in GESTURE_KEYS:
+        return replace(state, gesture="" if state.gesture == GESTURE_KEYS[k] else GESTURE_KEYS[k])
     deltas = {"w": (step, 0, 0), "s": (-step, 0, 0), "a": (0, step, 0), "d": (0, -step, 0), "q": (0, 0, step), "e": (0, 0, -step)}
     if k in deltas:
         dx, dy, dz = deltas[k]
         new_v = limits.clamp(VelocityCommand(round(v.vx + dx, 6), round(v.vy + dy, 6), round(v.yaw_rate + dz, 6)))
-        return KeyboardState(velocity=new_v)
+        return KeyboardState(velocity=new_v, gesture=state.gesture)
     if k == " ":
         return KeyboardState()
     if k in ("\r", "\n"):
@@ -110,7 +114,7 @@ class KeyboardSource(CommandSource):
         with self._lock:
             state = self._state
             self._state = replace(state, buttons=Buttons())
-        return CommandSample(velocity=state.velocity, buttons=state.buttons, alive=self._thread.is_alive())
+        return CommandSample(velocity=state.velocity, buttons=state.buttons, alive=self._thread.is_alive(), gesture=state.gesture)
 
     def close(self) -> None:
         """Stop the reader, wait for it (it looks at its stop flag every `READ_POLL_S`), restore the terminal."""

@@ -215,3 +215,10 @@ def test_read_errors_are_logged_and_counted_and_a_run_of_them_gives_up(
     assert source.read_errors == 1 + MAX_CONSECUTIVE_READ_ERRORS
     assert "ValueError: bad event" in caplog.text  # with its traceback
     assert f"gives up after {MAX_CONSECUTIVE_READ_ERRORS} failed reads in a row" in caplog.text
+
+
+def test_held_x_waves_while_the_sticks_drive() -> None:
+    state = GamepadState(axes={ABS_Y: -1.0}, buttons=frozenset({308}), last_event_time=0.0)
+    sample = map_gamepad(state, CFG, LIMITS, now=0.0)
+    assert sample.gesture == "wave" and sample.velocity.vx > 0
+    assert map_gamepad(GamepadState(), CFG, LIMITS, now=0.0).gesture == ""

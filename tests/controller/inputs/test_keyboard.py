@@ -126,3 +126,14 @@ def test_read_errors_are_logged_and_counted_and_a_run_of_them_gives_up(
     assert "keyboard read failed (1 in a row): bad key" in caplog.text
     assert "ValueError: bad key" in caplog.text  # with its traceback
     assert f"gives up after {MAX_CONSECUTIVE_READ_ERRORS} failed reads in a row" in caplog.text
+
+
+def test_number_keys_toggle_gestures_and_keep_the_velocity() -> None:
+    limits = CommandLimits()
+    state = apply_key(KeyboardState(), "w", limits)
+    state = apply_key(state, "1", limits)
+    assert state.gesture == "wave" and state.velocity.vx == pytest.approx(0.1)
+    state = apply_key(state, "w", limits)
+    assert state.gesture == "wave" and state.velocity.vx == pytest.approx(0.2)
+    assert apply_key(state, "2", limits).gesture == "raise_both"
+    assert apply_key(state, "1", limits).gesture == ""
