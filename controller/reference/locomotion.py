@@ -3,15 +3,18 @@
 MotionBricks' primitive: from the root state at the end of the context and the command,
 the critically damped spring of `root_spring` gives the root path over the next plan; the
 planner is asked to meet its position and heading at the plan's last frame, and fills in
-the whole-body motion (steps, arm swing) that gets there.
+the whole-body motion (steps, arm swing) that gets there. A gesture in force (`set_gesture`)
+adds arm keyframes over the plan (`gestures.py`), layered on whatever the legs do.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 from controller.inputs.base import ZERO, VelocityCommand
 from controller.planner.request import FPS, PlanRequest, target_root
+from controller.reference.gestures import NONE_NAMES, Gesture, GestureConfig, GestureLibrary, merged
 from controller.reference.root_spring import RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
 from hw.errors import ConfigError
 from hw.types import FloatArray
@@ -21,6 +24,7 @@ from hw.types import FloatArray
 class LocomotionConfig:
     plan_frames: int = 44  # 1.47 s at 30 fps: a multiple of 4 in 24-64 (the planner contract)
     spring: SpringConfig = field(default_factory=SpringConfig)
+    gestures: GestureConfig = field(default_factory=GestureConfig)
 
     def __post_init__(self) -> None:
         if self.plan_frames % 4 or not 24 <= self.plan_frames <= 64:
@@ -37,6 +41,30 @@ class SmartLocomotion:
         self._count = 0
         self.path: RootTrajectory | None = None  # the root path of the latest request
         self.path_start = 0.0  # run time of the path's frame 0 is path_start + 1/fps
+        self.library = GestureLibrary(cfg.gestures)
+        self.gestures: tuple[Gesture, ...] = ()  # the gesture in force (end inf) last, after those still blending out
+
+    @property
+    def gesture(self) -> Gesture | None:
+        """The gesture in force (name and start time), None when none is."""
+        last = self.gestures[-1] if self.gestures else None
+        return last if last is not None and math.isinf(last.end) else None
+
+    def set_gesture(self, name: str, t: float) -> bool:
+        """The gesture asked for at run time `t` ("" or "none": none): a new name starts at `t`, the previous one ends there.
+
+        True when that changed the gesture: a plan asked for at once starts its blend on time.
+        """
+        name = "" if name in NONE_NAMES else name
+        current = self.gesture
+        if (current.name if current else "") == name:
+            return False
+        if name:
+            self.library.style(name)  # an unknown name fails here, naming the valid ones
+        blend = self.cfg.gestures.blend_s
+        ended = (replace(g, end=t) if math.isinf(g.end) else g for g in self.gestures)
+        self.gestures = tuple(g for g in ended if g.alive(t, blend)) + ((Gesture(name, t),) if name else ())
+        return True
 
     def path_velocity(self, t: float) -> VelocityCommand | None:
         """The latest requested root path's velocity at run time `t`, in its heading frame (None: no path covers t)."""
@@ -56,5 +84,11 @@ class SmartLocomotion:
         last = self.cfg.plan_frames - 1
         x, y = path.positions[last]
         target = target_root(last, float(x), float(y), float(path.headings[last]))
+        first = splice_time + 1.0 / FPS  # plan frame k is at first + k / FPS
+        self.gestures = tuple(g for g in self.gestures if g.alive(first, self.cfg.gestures.blend_s))
+        arms = self.library.keyframes(self.gestures, first, self.cfg.plan_frames)
+        if arms and arms[-1].frame == last:
+            target, arms = merged(target, arms[-1]), arms[:-1]
         self._count += 1  # every plan its own seed: reproducible for a run seed, varied over the run
-        return PlanRequest(context=context, keyframes=(target,), lengths=(self.cfg.plan_frames,), seed=self._seed * 100_003 + self._count)
+        keyframes = (*arms, target)
+        return PlanRequest(context=context, keyframes=keyframes, lengths=(self.cfg.plan_frames,), seed=self._seed * 100_003 + self._count)
