@@ -1,6 +1,7 @@
 """The planned reference: the command drives the planner, the tracker reads the plan buffer.
 
-Each tick the supervised velocity command goes to smart locomotion, the scheduler asks
+Each tick the supervised velocity command (in the waypoints mode: the waypoint follower's
+command, from the measured root to the current target) goes to smart locomotion, the scheduler asks
 for plans (at 10 Hz, and at once on a meaningful command change) and the tracker gets a
 `ReferenceWindow` with the plan sampled now and a little ahead. No MuJoCo, no torch.
 """
@@ -20,6 +21,7 @@ from controller.reference.buffer import ReferenceBuffer
 from controller.reference.locomotion import LocomotionConfig, SmartLocomotion
 from controller.reference.scheduler import ReplanScheduler, SchedulerConfig
 from controller.reference.source import ReferenceSource
+from controller.reference.waypoints import WaypointFollower
 from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
 from hw import g1
@@ -45,8 +47,10 @@ class PlannedReference(ReferenceSource):
         simulated_clock: bool = True,
         joint_limits: tuple[FloatArray, FloatArray] | None = None,
         seed: int = 0,
+        follower: WaypointFollower | None = None,  # waypoints mode: the command comes from it
     ) -> None:
         self.cfg = cfg
+        self.follower = follower
         self.buffer = ReferenceBuffer()
         self.locomotion = SmartLocomotion(cfg.locomotion, seed)
         self.scheduler = ReplanScheduler(plan, self.locomotion.request, self.buffer, cfg.scheduler, simulated_clock, joint_limits)
@@ -59,10 +63,15 @@ class PlannedReference(ReferenceSource):
         qpos[g1.QPOS_ROOT_QUAT] = state.base_quat
         qpos[g1.QPOS_JOINTS] = state.joint_pos
         self.buffer.reset(qpos, state.time)
+        if self.follower is not None:
+            self.follower.start(state.time)
 
-    def window(self, state: RobotState, velocity: VelocityCommand) -> ReferenceWindow:
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
         t = state.time
+        if self.follower is not None:
+            velocity = self.follower.command(state)
         changed = self._last_command is None or _differs(velocity, self._last_command, self.cfg.command_change)
+        changed = self.locomotion.set_gesture(gesture, t) or changed
         if changed:
             self._last_command = velocity
         self.locomotion.command = velocity
@@ -83,7 +92,7 @@ class PlannedReference(ReferenceSource):
             "late_plans": c.late_plans,
             "planner_failures": c.planner_failures,
             "plan_clamped_values": c.clamped_values,
-        }
+        } | (self.follower.report() if self.follower is not None else {})
 
     def close(self) -> None:
         self.scheduler.close()
