@@ -17,8 +17,18 @@ import numpy as np
 from hw.errors import ConfigError
 from hw.types import FloatArray
 
-# Terms the runner knows how to compute, with their fixed dimension (None: number of joints).
-KNOWN_TERMS: dict[str, int | None] = {
+
+@dataclass(frozen=True)
+class PerJoint:
+    """A term whose dimension is a multiple of the number of joints (the reference's positions and velocities)."""
+
+    count: int
+
+
+# Terms the trackers know how to compute, with their fixed dimension (None: number of joints).
+# The velocity policy computes the first ten, the whole-body tracker (whole_body.py) the
+# BeyondMimic ones below them and its own subset of the others.
+KNOWN_TERMS: dict[str, int | PerJoint | None] = {
     "base_lin_vel": 3,
     "base_ang_vel": 3,
     "projected_gravity": 3,
@@ -29,6 +39,11 @@ KNOWN_TERMS: dict[str, int | None] = {
     "actions": None,
     "sin_phase": 2,
     "cos_phase": 2,
+    # holosoma-inference 0.1.3 'wbt' observation (config_values/observation.py): the reference's joint
+    # positions then velocities, and the reference torso's rotation in the robot torso's frame as the
+    # first two columns of its matrix, row-major.
+    "motion_command": PerJoint(2),
+    "motion_ref_ori_b": 6,
 }
 
 
@@ -55,12 +70,16 @@ class ObservationLayout:
     def size(self) -> int:
         return sum(t.dim for t in self.terms) * self.history_length
 
-    def check(self, num_joints: int, source: str) -> None:
-        """Every term must be known and have its expected dimension."""
+    def check(self, num_joints: int, source: str, computed: frozenset[str] | None = None) -> None:
+        """Every term must be known (and one the caller computes, when it says which) and have its expected dimension."""
         for term in self.terms:
             if term.name not in KNOWN_TERMS:
                 raise ConfigError(f"{source}: unknown observation term '{term.name}' (known: {', '.join(sorted(KNOWN_TERMS))})")
-            expected = KNOWN_TERMS[term.name] or num_joints
+            if computed is not None and term.name not in computed:
+                known = ", ".join(sorted(computed))
+                raise ConfigError(f"{source}: observation term '{term.name}' is not one this tracker computes (it computes: {known})")
+            spec = KNOWN_TERMS[term.name]
+            expected = spec if isinstance(spec, int) else num_joints * (spec.count if spec is not None else 1)
             if term.dim != expected:
                 raise ConfigError(f"{source}: observation term '{term.name}' has dim {term.dim}, expected {expected}")
 

@@ -32,9 +32,18 @@ def _decoupled(spec: TrackerSpec) -> Tracker:
     return DecoupledTracker(load_policy(spec.policy, spec.assets, spec.robot_joint_names))
 
 
+def _whole_body(spec: TrackerSpec) -> Tracker:
+    """`spec.policy` as a whole-body preset: `wbt_*` or a YAML path as given; a locomotion preset name (the
+    default 'fastsac', or 'ppo') picks the whole-body policy trained the same way ('wbt_fastsac', 'wbt_ppo')."""
+    from controller.tracking.whole_body import load_whole_body, whole_body_preset  # noqa: PLC0415
+
+    return load_whole_body(whole_body_preset(spec.policy), spec.assets, spec.robot_joint_names)
+
+
 TRACKERS: dict[str, Callable[[TrackerSpec], Tracker]] = {
     "velocity": _velocity,  # the velocity-command locomotion policy (holosoma's G1 loco policies)
     "decoupled": _decoupled,  # planned motion: legs through the velocity policy, waist and arms from the plan
+    "whole-body": _whole_body,  # planned motion: holosoma's whole-body tracking policy on the plan (needs --planner)
 }
 
 
