@@ -8,6 +8,7 @@ import pytest
 
 from controller.inputs.scripted import Scenario
 from controller.tracking.velocity_policy import PolicyConfig
+from controller.tracking.whole_body import WholeBodyConfig
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import load_config
@@ -22,9 +23,15 @@ def write(tmp_path: Path, text: str) -> Path:
 
 
 def test_shipped_policy_configs_load() -> None:
-    for path in POLICY_DIR.glob("*.yaml"):
-        cfg = load_config(PolicyConfig, path)
-        assert cfg.observation.size == 100
+    """Locomotion presets (100 observation values) and whole-body tracking presets (wbt_*, 154)."""
+    paths = sorted(POLICY_DIR.glob("*.yaml"))
+    whole_body = [p for p in paths if p.name.startswith("wbt_")]
+    assert whole_body and len(whole_body) < len(paths)
+    for path in paths:
+        if path in whole_body:
+            assert load_config(WholeBodyConfig, path).observation.size == 154
+        else:
+            assert load_config(PolicyConfig, path).observation.size == 100
 
 
 def test_unknown_key_names_file_and_dotted_key(tmp_path: Path) -> None:
