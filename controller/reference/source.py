@@ -18,8 +18,8 @@ class ReferenceSource(abc.ABC):
         """The run begins with the robot in `state`."""
 
     @abc.abstractmethod
-    def window(self, state: RobotState, velocity: VelocityCommand) -> ReferenceWindow:
-        """The reference of this tick, given the robot's state and the supervised velocity command."""
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
+        """The reference of this tick, given the robot's state, the supervised velocity command and the gesture asked for."""
 
     def report(self) -> dict[str, Any]:
         """Counters for the run report."""
@@ -32,5 +32,5 @@ class ReferenceSource(abc.ABC):
 class CommandReference(ReferenceSource):
     """The velocity command itself is the reference (the velocity tracker's own input)."""
 
-    def window(self, state: RobotState, velocity: VelocityCommand) -> ReferenceWindow:
-        return ReferenceWindow(state.time, velocity)
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
+        return ReferenceWindow(state.time, velocity)  # gestures need the planner

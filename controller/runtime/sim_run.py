@@ -128,6 +128,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
     stack.callback(robot.close)
     tracker_name = cfg.tracker or ("decoupled" if cfg.planner else "velocity")
     tracker = make_tracker(tracker_name, TrackerSpec(cfg.policy, assets, robot.joint_names))
+    if tracker.needs_plan and not cfg.planner:
+        raise ConfigError(f"the {tracker.name} tracker follows planned whole-body motion: add --planner")
     backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
     stack.callback(backend.close)
     source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))

@@ -21,6 +21,7 @@ class Tracker(abc.ABC):
     command_limits: CommandLimits  # the velocities it can follow: inputs scale their sticks to these
     latched_fault: str | None  # set when it stopped producing safe commands (the run damps)
     nonfinite_events: int  # non-finite outputs it caught (counted in the report)
+    needs_plan: bool = False  # it follows planned frames: a run without the planner is refused before it starts
 
     @abc.abstractmethod
     def step(self, state: RobotState, reference: ReferenceWindow) -> JointCommand:

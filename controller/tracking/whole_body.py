@@ -100,6 +100,7 @@ class WholeBodyTracker(Tracker):
     """Tracks the planned whole-body motion with a BeyondMimic-style policy; needs the planner in the loop."""
 
     name = "whole-body"
+    needs_plan = True
 
     def __init__(self, path: Path, cfg: WholeBodyConfig, robot_joint_names: tuple[str, ...], source: str = "policy config") -> None:
         self.cfg = cfg

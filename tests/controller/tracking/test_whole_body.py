@@ -386,9 +386,8 @@ def test_real_policy_stands_and_waves_with_the_planner() -> None:
 
 
 @pytest.mark.slow
-def test_without_the_planner_the_run_is_refused() -> None:
+def test_without_the_planner_the_run_is_refused_before_it_starts() -> None:
     from controller.runtime.sim_run import SimRunConfig, run
-    from hw.errors import RunAborted
 
-    with pytest.raises(RunAborted, match="--planner"):
+    with pytest.raises(ConfigError, match="the whole-body tracker follows planned whole-body motion: add --planner"):
         run(SimRunConfig(tracker="whole-body", duration=0.1))
