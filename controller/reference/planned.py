@@ -1,9 +1,11 @@
 """The planned reference: the command drives the planner, the tracker reads the plan buffer.
 
-Each tick the supervised velocity command (in the waypoints mode: the waypoint follower's
-command, from the measured root to the current target) goes to smart locomotion, the scheduler asks
+Each tick the supervised velocity command goes to smart locomotion, the scheduler asks
 for plans (at 10 Hz, and at once on a meaningful command change) and the tracker gets a
-`ReferenceWindow` with the plan sampled now and a little ahead. No MuJoCo, no torch.
+`ReferenceWindow` with the plan sampled now and a little ahead. In the waypoints mode a
+`WaypointFollower` gives both commands instead: the window's from the measured root (the
+legs follow it), the planner's from the planned root, both towards the current target.
+No MuJoCo, no torch.
 """
 
 from __future__ import annotations
@@ -64,17 +66,19 @@ class PlannedReference(ReferenceSource):
         qpos[g1.QPOS_JOINTS] = state.joint_pos
         self.buffer.reset(qpos, state.time)
         if self.follower is not None:
-            self.follower.start(state.time)
+            self.follower.start(state)
 
     def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
         t = state.time
-        if self.follower is not None:
+        planned = velocity  # what the planner is asked for
+        if self.follower is not None:  # the legs walk the robot to the target, the planner walks the plan there
             velocity = self.follower.command(state)
-        changed = self._last_command is None or _differs(velocity, self._last_command, self.cfg.command_change)
+            planned = self.follower.plan_command(self.buffer.sample(t).qpos, self.cfg.locomotion.spring)
+        changed = self._last_command is None or _differs(planned, self._last_command, self.cfg.command_change)
         changed = self.locomotion.set_gesture(gesture, t) or changed
         if changed:
-            self._last_command = velocity
-        self.locomotion.command = velocity
+            self._last_command = planned
+        self.locomotion.command = planned
         self.scheduler.update(t, replan_now=changed)
         return ReferenceWindow(
             t,

@@ -2,12 +2,20 @@
 
 A `WaypointFollower` closes the loop on the robot's measured root: each tick it turns the
 error from the measured pose to the current target into a velocity command
-(`root_spring.waypoint_command`, with a stop band around the target so that the robot
-stands instead of shuffling on the spot), decides when the robot has settled there
-(within the tolerances and slow for a short hold), records the error at that moment and
-moves on; after the last target it commands zero. Run without the planner it is the plain
-go-to-pose loop (`WaypointReference`); with the planner, `PlannedReference` plans from its
-command. No MuJoCo, no torch.
+(`root_spring.waypoint_command`, with a floor on small commands and a stop band, both
+measured on the locomotion policy), decides when the robot has settled there (on target
+and at rest for a short hold), records the error at that moment and moves on; after the
+last target it commands zero. Without the planner the follower's command is the window's
+velocity (`WaypointReference`: the plain go-to-pose loop). With the planner
+(`PlannedReference`) the legs follow the same command (the decoupled tracker's
+`legs_follow: command`), and the planner walks its own root to the same target
+(`plan_command`), so the plan and the robot meet at every waypoint.
+
+Measured on the `waypoints` scenario: with the legs on the spring path's or the plan's
+own velocity instead, the robot reached none of the 4 poses in 45 s (2 and 0 of them
+when the planner was asked for the robot's command): the planned root answers a command
+late and drifts, and only feedback from the measured root brings the robot onto a
+target. No MuJoCo, no torch.
 """
 
 from __future__ import annotations
@@ -19,30 +27,36 @@ from typing import Any
 
 from controller.inputs.base import ZERO, CommandLimits, VelocityCommand
 from controller.inputs.scripted import Waypoint
-from controller.reference.root_spring import RootState, waypoint_command
+from controller.reference.root_spring import RootState, SpringConfig, no_overshoot_gain, waypoint_command
 from controller.reference.source import ReferenceSource
 from controller.reference.window import ReferenceWindow
-from hw import quat
+from hw import g1, quat
 from hw.errors import ConfigError
-from hw.types import RobotState
+from hw.types import FloatArray, RobotState
 
 
 @dataclass(frozen=True)
 class WaypointConfig:
     """How the follower walks to a target and when it counts as there.
 
-    The approach (`max_speed`, `slow_radius`, `max_yaw_rate`, `slow_angle`) is
-    `root_spring.waypoint_command`'s. Inside `stop_radius` (m) the planar command is zero
-    and inside `stop_angle_deg` the yaw rate is zero: the policy then stands still, where
-    a command of a few cm/s makes it step on the spot and drift. Settled: within
-    `position_tolerance` (m) and `heading_tolerance_deg`, slower than `settle_speed` (m/s)
-    and `settle_yaw_rate` (rad/s), for `settle_hold_s` without a break.
+    The approach is `root_spring.waypoint_command`'s: `max_speed` (m/s), proportionally
+    slower inside `slow_radius` (m); `max_yaw_rate` (rad/s) times the heading error over
+    `slow_angle` (rad); facing the target point beyond twice `slow_radius` and the target
+    heading inside it (turning while walking in: facing the point to 0.15 m and turning
+    on the spot there took 26-36 s for the `waypoints` square against 22-27, a turn on
+    the spot carrying the pelvis up to 8 cm). The fastsac policy walks about 0.045 m/s slower than commanded at
+    small speeds (0.06 for 0.1) and a stop carries it about 4.4 cm on whatever the speed,
+    so a planar command never drops below `min_speed` (nor a yaw rate near the target
+    below `min_yaw_rate`), and the command is zero inside `stop_radius` (about one stop's
+    carry) and `stop_angle_deg`. That stop holds until the robot has come to rest outside
+    the tolerance (or is pushed twice as far), so the stop's own carry does not restart
+    the walk. Settled: within `position_tolerance` (m) and `heading_tolerance_deg`, and
+    slower than `settle_speed` (m/s) and `settle_yaw_rate` (rad/s) for `settle_hold_s`.
     """
 
     max_speed: float = 0.6
     max_yaw_rate: float = 1.0
     slow_radius: float = 0.5
-    turn_radius: float = 0.5
     slow_angle: float = 0.5
     min_speed: float = 0.1
     min_yaw_rate: float = 0.15
@@ -59,7 +73,6 @@ class WaypointConfig:
             "max_speed",
             "max_yaw_rate",
             "slow_radius",
-            "turn_radius",
             "slow_angle",
             "position_tolerance",
             "heading_tolerance_deg",
@@ -108,10 +121,11 @@ class WaypointFollower:
     def done(self) -> bool:
         return self.index >= len(self.targets)
 
-    def start(self, time: float) -> None:
-        """The run begins at `time`; a restart (after a fall) keeps the progress and the start time."""
+    def start(self, state: RobotState) -> None:
+        """The run begins (its start time is `state.time`); a restart after a fall keeps the progress and the start time."""
+        _check_position(state)
         if self.start_time is None:
-            self.start_time = time
+            self.start_time = state.time
         self._rest_since = None
 
     def errors_to(self, state: RobotState) -> tuple[float, float]:
@@ -124,7 +138,8 @@ class WaypointFollower:
     def command(self, state: RobotState) -> VelocityCommand:
         """The velocity command (heading frame) of this tick; also advances to the next target once settled."""
         if self.start_time is None:
-            self.start(state.time)
+            self.start(state)
+        _check_position(state)
         if self.done:
             return ZERO
         distance, heading_error = self.errors_to(state)
@@ -149,15 +164,14 @@ class WaypointFollower:
         )
         target = self.targets[self.index]
         cmd = waypoint_command(root, target, cfg.max_speed, cfg.max_yaw_rate, cfg.slow_radius, cfg.slow_angle)
-        turn = waypoint_command(root, target, cfg.max_speed, cfg.max_yaw_rate, cfg.turn_radius, cfg.slow_angle)
-        near = distance <= cfg.turn_radius  # inside, the yaw command turns to the target heading
+        near = distance <= cfg.slow_radius  # inside, the yaw command turns to the target heading
         at_rest = self._at_rest(state.time)
         position_out = distance > cfg.position_tolerance and (at_rest or distance > 2.0 * cfg.position_tolerance)
         self._hold_position = not position_out if self._hold_position else distance <= cfg.stop_radius
         heading_tolerance = math.radians(cfg.heading_tolerance_deg)
         heading_out = abs(heading_error) > heading_tolerance and (at_rest or abs(heading_error) > 2.0 * heading_tolerance)
         self._hold_heading = near and (not heading_out if self._hold_heading else abs(heading_error) <= math.radians(cfg.stop_angle_deg))
-        vx, vy, yaw_rate = cmd.vx, cmd.vy, turn.yaw_rate
+        vx, vy, yaw_rate = cmd.vx, cmd.vy, cmd.yaw_rate
         if self._hold_position:
             vx = vy = 0.0
         else:
@@ -169,6 +183,27 @@ class WaypointFollower:
         elif near and yaw_rate != 0.0 and abs(yaw_rate) < cfg.min_yaw_rate:
             yaw_rate = math.copysign(cfg.min_yaw_rate, yaw_rate)
         cmd = VelocityCommand(vx, vy, yaw_rate)
+        return self.limits.clamp(cmd) if self.limits is not None else cmd
+
+    def plan_command(self, qpos: FloatArray, spring: SpringConfig | None = None) -> VelocityCommand:
+        """The go-to-pose command for the planned root at `qpos` [36]: towards the current target (the last one when done).
+
+        The planner continues its own frames, open loop: fed the robot's command, its root
+        drifted 1.6 m and 70 degrees from the robot's on average over the `waypoints`
+        square. Walked to the same target from where the plan is, plan and robot meet at
+        every waypoint. The gains are the springs' no-overshoot bound (`no_overshoot_gain`):
+        no floor, no stop band (the spring path has no dead band), and the plan's root
+        answers a command late, so faster gains made it circle the target (measured mean
+        root and heading errors, seeds 0 and 1: 0.36-0.38 m and 21-31 degrees at the bound,
+        0.49 m and 43 degrees with the robot's gains).
+        """
+        cfg, spring = self.cfg, spring or SpringConfig()
+        target = self.targets[min(self.index, len(self.targets) - 1)]
+        heading = float(quat.heading(qpos[g1.QPOS_ROOT_QUAT]))
+        root = RootState(position=(float(qpos[0]), float(qpos[1])), velocity=(0.0, 0.0), heading=heading, yaw_rate=0.0)
+        slow_radius = cfg.max_speed / no_overshoot_gain(spring.velocity_halflife)
+        slow_angle = cfg.max_yaw_rate / no_overshoot_gain(spring.heading_halflife)
+        cmd = waypoint_command(root, target, cfg.max_speed, cfg.max_yaw_rate, slow_radius, slow_angle)
         return self.limits.clamp(cmd) if self.limits is not None else cmd
 
     def _settled(self, state: RobotState, distance: float, heading_error: float) -> bool:
@@ -189,12 +224,22 @@ class WaypointFollower:
 
     def report(self) -> dict[str, Any]:
         """Per-waypoint errors at settling, the time from the start to the last one settled (None: not reached)."""
-        done = self.done_time is not None and self.start_time is not None
+        elapsed = None
+        if self.done_time is not None and self.start_time is not None:
+            elapsed = round(self.done_time - self.start_time, 3)
         return {
             "waypoints_reached": len(self.errors),
             "waypoint_errors": [{"position_m": e.position_m, "heading_deg": e.heading_deg} for e in self.errors],
-            "waypoint_time_s": round(self.done_time - self.start_time, 3) if done else None,  # type: ignore[operator]
+            "waypoint_time_s": elapsed,
         }
+
+
+def _check_position(state: RobotState) -> None:
+    if not state.has_base_position:
+        raise ConfigError(
+            "the waypoints mode walks to positions, but this robot's state has no base position estimate "
+            "(hardware: not yet); run waypoints on the simulator directly"
+        )
 
 
 class WaypointReference(ReferenceSource):
@@ -207,7 +252,7 @@ class WaypointReference(ReferenceSource):
         self.follower = follower
 
     def start(self, state: RobotState) -> None:
-        self.follower.start(state.time)
+        self.follower.start(state)
 
     def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
         return ReferenceWindow(state.time, self.follower.command(state))  # gestures need the planner
