@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -120,6 +121,14 @@ class ReferenceBuffer:
         self._segments.append(_Segment(start_time, _read_only(new)))
         self._starts.append(start_time)
         self._drop_history(start_time - self.history_s)
+
+    def move(self, transform: Callable[[FloatArray], FloatArray]) -> None:
+        """Apply `transform` (frames [n, 36] -> frames) to everything held, e.g. a rigid move of the whole plan
+        onto the robot: the buffer stays continuous, so the next context read from it is too."""
+        self._require_content()
+        self._segments = [
+            _Segment(seg.start, _read_only(_checked_frames(transform(seg.frames.copy()), "moved plan"))) for seg in self._segments
+        ]
 
     def _hold_until(self, t: float) -> None:
         """Fill the time up to `t` with the last frame held: what the tracker has been reading there anyway

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 from controller.inputs.base import ZERO, VelocityCommand
 from controller.planner.request import FPS, PlanRequest, target_root
 from controller.reference.gestures import NONE_NAMES, Gesture, GestureConfig, GestureLibrary, merged
-from controller.reference.root_spring import RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
+from controller.reference.root_spring import RootState, RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
 from hw.errors import ConfigError
 from hw.types import FloatArray
 
@@ -76,9 +76,33 @@ class SmartLocomotion:
         vx, vy = self.path.local_velocity(k)
         return VelocityCommand(vx, vy, float(self.path.yaw_rates[k]))
 
+    def _continued(self, measured: RootState, splice_time: float) -> RootState:
+        """The spring's rates carried over from the previous path (where it covers `splice_time`), at the context's pose.
+
+        The spring is a function of the commands alone: the plan's own speed (a step's
+        sway, an overshoot) never feeds back into the next target. The velocity turns with
+        the heading difference between the context and the previous path (after a resync).
+        """
+        if self.path is None:
+            return measured
+        k = round((splice_time - self.path_start) * FPS) - 1
+        if not 0 <= k < self.path.length:
+            return measured
+        previous = self.path.state_at(k)
+        turn = measured.heading - previous.heading
+        c, s = math.cos(turn), math.sin(turn)
+
+        def turned(v: tuple[float, float]) -> tuple[float, float]:
+            return (c * v[0] - s * v[1], s * v[0] + c * v[1])
+
+        return RootState(
+            position=measured.position, heading=measured.heading, velocity=turned(previous.velocity), yaw_rate=previous.yaw_rate,
+            acceleration=turned(previous.acceleration), yaw_acceleration=previous.yaw_acceleration,
+        )  # fmt: skip
+
     def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         """The plan that continues `context` towards where the spring takes the root under the command."""
-        state = root_state_from_frames(context, FPS)
+        state = self._continued(root_state_from_frames(context, FPS), splice_time)
         path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
         self.path, self.path_start = path, splice_time
         last = self.cfg.plan_frames - 1

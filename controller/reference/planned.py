@@ -5,7 +5,13 @@ for plans (at 10 Hz, and at once on a meaningful command change) and the tracker
 `ReferenceWindow` with the plan sampled now and a little ahead. In the waypoints mode a
 `WaypointFollower` gives both commands instead: the window's from the measured root (the
 legs follow it), the planner's from the planned root, both towards the current target.
-No MuJoCo, no torch.
+When the robot has fallen behind the plan (a policy that cannot reach the planned speed,
+a push) by more than `resync_distance_m` or `resync_heading_rad`, the whole buffer is moved
+rigidly (about z) from where the plan is to where the robot is: the next plan starts from
+the robot, and the reference never runs away from it. Moving the whole buffer, not only the
+next context, keeps it continuous: a context across a jump would read as a burst of speed,
+and the spring would run the plan ahead. The arms' angles do not change; the legs follow
+the command. No MuJoCo, no torch.
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from controller.reference.source import ReferenceSource
 from controller.reference.waypoints import WaypointFollower
 from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
-from hw import g1
+from hw import g1, quat
 from hw.types import FloatArray, RobotState
 
 
@@ -37,6 +43,8 @@ class PlannedReferenceConfig:
     lead_s: float = 0.5  # the tracker takes the planned root's mean velocity over this much of the plan ahead
     path_lead_s: float = 0.1  # ... or the root path's velocity this far ahead
     command_change: float = 0.1  # m/s or rad/s: a change this large asks for a plan at once
+    resync_distance_m: float = 0.1  # the plan's root this far from the measured root: the next plan starts from the robot
+    resync_heading_rad: float = 0.1  # ... or its heading this far off
 
 
 class PlannedReference(ReferenceSource):
@@ -57,6 +65,7 @@ class PlannedReference(ReferenceSource):
         self.locomotion = SmartLocomotion(cfg.locomotion, seed)
         self.scheduler = ReplanScheduler(plan, self.locomotion.request, self.buffer, cfg.scheduler, simulated_clock, joint_limits)
         self._last_command: VelocityCommand | None = None
+        self.resyncs = 0
 
     def start(self, state: RobotState) -> None:
         """Hold the robot's measured pose until the first plan arrives."""
@@ -70,6 +79,12 @@ class PlannedReference(ReferenceSource):
 
     def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
         t = state.time
+        now = self.buffer.sample(t)
+        drift = self._drift(now.qpos, state) if state.has_base_position else None
+        if drift is not None:
+            self.buffer.move(lambda frames: shift_frames(frames, *drift))
+            self.resyncs += 1
+            now = self.buffer.sample(t)
         planned = velocity  # what the planner is asked for
         if self.follower is not None:  # the legs walk the robot to the target, the planner walks the plan there
             velocity = self.follower.command(state)
@@ -83,7 +98,7 @@ class PlannedReference(ReferenceSource):
         return ReferenceWindow(
             t,
             velocity,
-            plan=self.buffer.sample(t),
+            plan=now,
             ahead=self.buffer.sample(t + self.cfg.lead_s),
             path_velocity=self.locomotion.path_velocity(t + self.cfg.path_lead_s),
         )
@@ -96,10 +111,31 @@ class PlannedReference(ReferenceSource):
             "late_plans": c.late_plans,
             "planner_failures": c.planner_failures,
             "plan_clamped_values": c.clamped_values,
+            "plan_resyncs": self.resyncs,
         } | (self.follower.report() if self.follower is not None else {})
 
     def close(self) -> None:
         self.scheduler.close()
+
+    def _drift(self, planned: FloatArray, state: RobotState) -> tuple[FloatArray, FloatArray] | None:
+        """(planned, measured) root poses when they are further apart than the resync thresholds."""
+        plan_pose = np.array([planned[0], planned[1], float(quat.heading(planned[g1.QPOS_ROOT_QUAT]))])
+        measured = np.array([state.base_pos[0], state.base_pos[1], float(quat.heading(state.base_quat))])
+        far = math.hypot(*(measured[:2] - plan_pose[:2])) > self.cfg.resync_distance_m
+        turned = abs(float(quat.wrap_angle(measured[2] - plan_pose[2]))) > self.cfg.resync_heading_rad
+        return (plan_pose, measured) if far or turned else None
+
+
+def shift_frames(frames: FloatArray, source: FloatArray, target: FloatArray) -> FloatArray:
+    """`frames` (qpos [K, 36]) moved rigidly about z so that root pose `source` (x, y, heading) lands on `target`."""
+    turn = float(quat.wrap_angle(target[2] - source[2]))
+    c, s = math.cos(turn), math.sin(turn)
+    out = np.array(frames, dtype=np.float64)
+    rel = out[:, :2] - source[:2]
+    out[:, 0] = target[0] + c * rel[:, 0] - s * rel[:, 1]
+    out[:, 1] = target[1] + s * rel[:, 0] + c * rel[:, 1]
+    out[:, g1.QPOS_ROOT_QUAT] = quat.multiply(quat.from_yaw(turn), out[:, g1.QPOS_ROOT_QUAT])
+    return out
 
 
 def _differs(a: VelocityCommand, b: VelocityCommand, tol: float) -> bool:

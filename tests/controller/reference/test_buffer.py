@@ -268,3 +268,20 @@ def test_a_plan_after_the_buffer_ran_out_follows_the_held_pose() -> None:
     np.testing.assert_allclose(buffer.sample(0.1).qpos, pose, atol=1e-12)  # the gap holds the pose read there before
     np.testing.assert_allclose(buffer.sample(start + 5 / FPS).qpos, plan[5], atol=1e-9)
     assert not buffer.sample(start + 5 / FPS).held
+
+
+def test_move_applies_to_everything_held_and_keeps_it_continuous() -> None:
+    buffer = ReferenceBuffer()
+    buffer.splice(walk(plan_times(0.0, 24)), 0.0)
+    buffer.splice(walk(plan_times(0.5, 24)), 0.5)
+    before = [buffer.sample(t).qpos for t in np.arange(0.0, 1.2, 0.02)]
+
+    def lift(frames: np.ndarray) -> np.ndarray:
+        frames[:, 0] += 1.0
+        return frames
+
+    buffer.move(lift)
+    after = [buffer.sample(t).qpos for t in np.arange(0.0, 1.2, 0.02)]
+    for a, b in zip(before, after, strict=True):
+        np.testing.assert_allclose(b[0], a[0] + 1.0, atol=1e-12)
+        np.testing.assert_allclose(b[1:], a[1:], atol=1e-12)

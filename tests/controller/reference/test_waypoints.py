@@ -11,7 +11,7 @@ import pytest
 from controller.inputs.base import CommandLimits, VelocityCommand
 from controller.inputs.scripted import Waypoint, load_scenario
 from controller.planner.request import Plan, PlanRequest
-from controller.reference.planned import PlannedReference
+from controller.reference.planned import PlannedReference, PlannedReferenceConfig
 from controller.reference.root_spring import SpringConfig, no_overshoot_gain
 from controller.reference.waypoints import WaypointConfig, WaypointFollower, WaypointReference
 from hw import g1, quat
@@ -166,7 +166,8 @@ def test_the_planned_reference_gives_the_legs_the_robots_command_and_the_planner
         return Plan(np.repeat(request.context[-1:], n, axis=0), np.ones((n, 2), dtype=bool), 0.0)
 
     f = follower((1.5, 0.0, 0.0))
-    ref = PlannedReference(hold_pose, follower=f)
+    no_resync = PlannedReferenceConfig(resync_distance_m=math.inf, resync_heading_rad=math.inf)
+    ref = PlannedReference(hold_pose, no_resync, follower=f)
     try:
         ref.start(state(0.0, 0.0, 0.0))  # the plan holds the start pose
         window = ref.window(state(0.02, 1.2, 0.0), VelocityCommand())  # the robot walked on, 0.3 m short
@@ -175,6 +176,14 @@ def test_the_planned_reference_gives_the_legs_the_robots_command_and_the_planner
         assert ref.report()["waypoints_reached"] == 0 and "replans" in ref.report()
     finally:
         ref.close()
+    resynced = PlannedReference(hold_pose, follower=follower((1.5, 0.0, 0.0)))
+    try:  # with the default resync the plan is moved onto the robot: both are 0.3 m short
+        resynced.start(state(0.0, 0.0, 0.0))
+        resynced.window(state(0.02, 1.2, 0.0), VelocityCommand())
+        assert resynced.report()["plan_resyncs"] == 1
+        assert resynced.buffer.sample(0.02).qpos[0] == pytest.approx(1.2)
+    finally:
+        resynced.close()
 
 
 def test_the_shipped_scenario_is_a_square_of_poses_back_to_the_start() -> None:
