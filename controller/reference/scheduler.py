@@ -126,7 +126,14 @@ class ReplanScheduler:
             self._next_request = t + self.cfg.period_s
             return
         ready_at = t + self.cfg.simulated_latency_s if self.simulated_clock else None
-        self._in_flight = _InFlight(self._executor.submit(self._plan, request), t, splice_time, ready_at, time.perf_counter())
+        try:
+            future = self._executor.submit(self._plan, request)
+        except RuntimeError as exc:  # the worker is gone (shut down under us): count it, plan on a fresh one next time
+            self._fail(f"the planner worker is gone ({exc})")
+            self._restart_worker()
+            self._next_request = t + self.cfg.period_s
+            return
+        self._in_flight = _InFlight(future, t, splice_time, ready_at, time.perf_counter())
         self.counters.requests += 1
         self._next_request = t + self.cfg.period_s
 

@@ -145,3 +145,14 @@ def test_config_mistakes_name_the_field() -> None:
         SchedulerConfig(period_s=0.0)
     with pytest.raises(ConfigError, match="always late"):
         SchedulerConfig(lookahead_s=0.05, simulated_latency_s=0.06)
+
+
+def test_a_dead_worker_is_counted_and_replaced(planner: Planner) -> None:
+    scheduler, _ = make(planner.plan)
+    run_ticks(scheduler, 0.5)
+    scheduler._executor.shutdown(wait=True)  # the worker dies under the scheduler
+    for k in range(25, 75):
+        scheduler.update(k * TICK)
+    assert scheduler.counters.planner_failures == 1 and "worker is gone" in str(scheduler.last_failure)
+    assert scheduler.counters.replans >= 8  # a fresh worker took over
+    scheduler.close()
