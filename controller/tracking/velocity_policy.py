@@ -8,7 +8,6 @@ name is checked when the policy loads.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from controller.inputs.base import CommandLimits, VelocityCommand
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
+from controller.tracking.onnx_policy import check_io, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.tracker import Tracker
 from hw import quat
 from hw.errors import ConfigError, PolicyError
@@ -90,11 +90,11 @@ class VelocityPolicy(Tracker):
         if not path.is_file():
             raise PolicyError(f"policy file not found: {path}; run 'g1ctl assets fetch' or pass a valid path")
         self._session = open_session(path, PolicyError, "ONNX policy")
-        meta = {k: _json_or_text(v) for k, v in self._session.get_modelmeta().custom_metadata_map.items()}
-        self.joint_names = _metadata_joint_names(meta, path)
+        meta = read_metadata(self._session)
+        self.joint_names = metadata_joint_names(meta, path)
         n = len(self.joint_names)
         cfg.observation.check(n, source)
-        self._check_io(cfg, n)
+        check_io(self._session, path, cfg.input_name, cfg.output_name, cfg.observation.size, n)
         missing = [j for j in self.joint_names if j not in robot_joint_names]
         if missing:
             raise PolicyError(f"{path.name}: joints {missing} are not on the robot (robot joints: {len(robot_joint_names)})")
@@ -105,8 +105,8 @@ class VelocityPolicy(Tracker):
         order = [robot_joint_names.index(j) for j in self.joint_names]
         self.robot_index: slice | np.ndarray = slice(None) if order == list(range(len(robot_joint_names))) else np.array(order)
         # Arrays every command shares are read-only: a joint command never copies them.
-        self.kp = read_only(self._gains("kp", meta, cfg.kp, source))
-        self.kd = read_only(self._gains("kd", meta, cfg.kd, source))
+        self.kp = read_only(joint_gains("kp", meta, cfg.kp, self.joint_names, path, source))
+        self.kd = read_only(joint_gains("kd", meta, cfg.kd, self.joint_names, path, source))
         self.default_pos = read_only(np.array([cfg.default_joint_pos.get(j, 0.0) for j in self.joint_names]))
         scale = cfg.action_scale if cfg.action_scale is not None else meta.get("action_scale")
         if scale is None:
@@ -121,42 +121,6 @@ class VelocityPolicy(Tracker):
         self.nonfinite_events = 0
         self.latched_fault: str | None = None
         self.reset()
-
-    def _check_io(self, cfg: PolicyConfig, n: int) -> None:
-        inputs = {i.name: i.shape for i in self._session.get_inputs()}
-        outputs = {o.name: o.shape for o in self._session.get_outputs()}
-        name = self.path.name
-        if cfg.input_name not in inputs:
-            raise PolicyError(f"{name}: no input '{cfg.input_name}' (inputs: {', '.join(inputs)}); fix 'input_name' in the policy config")
-        if cfg.output_name not in outputs:
-            raise PolicyError(
-                f"{name}: no output '{cfg.output_name}' (outputs: {', '.join(outputs)}); fix 'output_name' in the policy config"
-            )
-        in_dim = inputs[cfg.input_name][-1]
-        if isinstance(in_dim, int) and in_dim != cfg.observation.size:
-            raise PolicyError(
-                f"{name}: input '{cfg.input_name}' takes {in_dim} values but the observation layout makes {cfg.observation.size}"
-            )
-        out_dim = outputs[cfg.output_name][-1]
-        if isinstance(out_dim, int) and out_dim != n:
-            raise PolicyError(f"{name}: output '{cfg.output_name}' has {out_dim} values but the metadata names {n} joints")
-
-    def _gains(self, key: str, meta: dict[str, object], override: dict[str, float] | None, source: str) -> FloatArray:
-        values = meta.get(key)
-        if values is None:
-            if override is None or set(override) != set(self.joint_names):
-                raise PolicyError(
-                    f"{self.path.name}: no '{key}' in metadata; give all {len(self.joint_names)} joints under '{key}' in {source}"
-                )
-            return np.array([override[j] for j in self.joint_names])
-        gains = np.asarray(values, float)
-        if gains.shape != (len(self.joint_names),):
-            raise PolicyError(f"{self.path.name}: metadata '{key}' has {gains.size} values for {len(self.joint_names)} joints")
-        for joint, value in (override or {}).items():
-            if joint not in self.joint_names:
-                raise ConfigError(f"{source}: '{key}' override names unknown joint '{joint}'")
-            gains[self.joint_names.index(joint)] = value
-        return gains
 
     def reset(self) -> None:
         self.obs.reset()
@@ -220,22 +184,6 @@ class VelocityPolicy(Tracker):
 
     def damping_command(self) -> JointCommand:
         return JointCommand(q=self.last_target, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros)
-
-
-def _json_or_text(text: str) -> object:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
-
-
-def _metadata_joint_names(meta: dict[str, object], path: Path) -> tuple[str, ...]:
-    names = meta.get("dof_names") or meta.get("joint_names")
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or not names:
-        raise PolicyError(f"{path.name}: metadata has no joint name list ('dof_names'); export the policy with its joint names")
-    if len(set(names)) != len(names):
-        raise PolicyError(f"{path.name}: metadata joint names repeat")
-    return tuple(names)
 
 
 def _command_limits(meta: dict[str, object]) -> CommandLimits:

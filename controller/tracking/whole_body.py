@@ -52,9 +52,9 @@ from controller.inputs.base import CommandLimits
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
+from controller.tracking.onnx_policy import check_io, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.presets import available_policies, policy_config_path
 from controller.tracking.tracker import Tracker
-from controller.tracking.velocity_policy import _json_or_text, _metadata_joint_names  # one reading of holosoma's metadata
 from hw import g1
 from hw.errors import ConfigError, PolicyError
 from hw.g1 import DAMPING_KD, DEFAULT_JOINT_POS, EFFORT_LIMITS
@@ -110,8 +110,8 @@ class WholeBodyTracker(Tracker):
         if not path.is_file():
             raise PolicyError(f"policy file not found: {path}; run 'g1ctl assets fetch' or pass a valid path")
         self._session = open_session(path, PolicyError, "ONNX policy")
-        meta = {k: _json_or_text(v) for k, v in self._session.get_modelmeta().custom_metadata_map.items()}
-        self.joint_names = _metadata_joint_names(meta, path)
+        meta = read_metadata(self._session)
+        self.joint_names = metadata_joint_names(meta, path)
         n = len(self.joint_names)
         cfg.observation.check(n, source, WHOLE_BODY_TERMS)
         self._feed = self._check_io(cfg, n)
@@ -132,9 +132,9 @@ class WholeBodyTracker(Tracker):
             raise PolicyError(f"the robot has no {absent}: the torso's orientation cannot be computed")
         self._robot_waist = [robot_joint_names.index(j) for j in waist]
         self._reference_waist = [g1.QPOS_JOINTS.start + g1.JOINT_NAMES.index(j) for j in waist]
-        metadata_kp = self._gains("kp", meta, None, source)
-        self.kp = read_only(self._gains("kp", meta, cfg.kp, source))
-        self.kd = read_only(self._gains("kd", meta, cfg.kd, source))
+        metadata_kp = joint_gains("kp", meta, None, self.joint_names, path, source)
+        self.kp = read_only(joint_gains("kp", meta, cfg.kp, self.joint_names, path, source))
+        self.kd = read_only(joint_gains("kd", meta, cfg.kd, self.joint_names, path, source))
         self.default_pos = read_only(np.array([cfg.default_joint_pos.get(j, 0.0) for j in self.joint_names]))
         self.action_scale = read_only(self._action_scale(meta, metadata_kp, source))
         self.obs = ObservationBuilder(cfg.observation)
@@ -149,15 +149,8 @@ class WholeBodyTracker(Tracker):
 
     def _check_io(self, cfg: WholeBodyConfig, n: int) -> dict[str, np.ndarray]:
         """Check the ONNX inputs and outputs against the config; return the input feed, the observation slot left empty."""
-        inputs = {i.name: i.shape for i in self._session.get_inputs()}
-        outputs = {o.name: o.shape for o in self._session.get_outputs()}
+        inputs = check_io(self._session, self.path, cfg.input_name, cfg.output_name, cfg.observation.size, n)
         name = self.path.name
-        if cfg.input_name not in inputs:
-            raise PolicyError(f"{name}: no input '{cfg.input_name}' (inputs: {', '.join(inputs)}); fix 'input_name' in the policy config")
-        if cfg.output_name not in outputs:
-            raise PolicyError(
-                f"{name}: no output '{cfg.output_name}' (outputs: {', '.join(outputs)}); fix 'output_name' in the policy config"
-            )
         if cfg.clip_input is not None and cfg.clip_input not in inputs:
             raise PolicyError(
                 f"{name}: no input '{cfg.clip_input}' (inputs: {', '.join(inputs)}); fix or clear 'clip_input' in the policy config"
@@ -165,32 +158,7 @@ class WholeBodyTracker(Tracker):
         unfed = [i for i in inputs if i not in (cfg.input_name, cfg.clip_input)]
         if unfed:
             raise PolicyError(f"{name}: inputs {unfed} are not fed by this tracker (it feeds 'input_name' and 'clip_input')")
-        in_dim = inputs[cfg.input_name][-1]
-        if isinstance(in_dim, int) and in_dim != cfg.observation.size:
-            raise PolicyError(
-                f"{name}: input '{cfg.input_name}' takes {in_dim} values but the observation layout makes {cfg.observation.size}"
-            )
-        out_dim = outputs[cfg.output_name][-1]
-        if isinstance(out_dim, int) and out_dim != n:
-            raise PolicyError(f"{name}: output '{cfg.output_name}' has {out_dim} values but the metadata names {n} joints")
         return {cfg.clip_input: np.zeros((1, 1), dtype=np.float32)} if cfg.clip_input is not None else {}
-
-    def _gains(self, key: str, meta: dict[str, object], override: dict[str, float] | None, source: str) -> FloatArray:
-        values = meta.get(key)
-        if values is None:
-            if override is None or set(override) != set(self.joint_names):
-                raise PolicyError(
-                    f"{self.path.name}: no '{key}' in metadata; give all {len(self.joint_names)} joints under '{key}' in {source}"
-                )
-            return np.array([override[j] for j in self.joint_names])
-        gains = np.asarray(values, float)
-        if gains.shape != (len(self.joint_names),):
-            raise PolicyError(f"{self.path.name}: metadata '{key}' has {gains.size} values for {len(self.joint_names)} joints")
-        for joint, value in (override or {}).items():
-            if joint not in self.joint_names:
-                raise ConfigError(f"{source}: '{key}' override names unknown joint '{joint}'")
-            gains[self.joint_names.index(joint)] = value
-        return gains
 
     def _action_scale(self, meta: dict[str, object], kp: FloatArray, source: str) -> FloatArray:
         """The config's scale, else the metadata's (a number, a list or holosoma's comma-separated text), else effort / kp."""
