@@ -55,13 +55,12 @@ class DecoupledTracker(Tracker):
         self._upper_in_qpos = np.array(g1.joint_indices(cfg.planned_joints, qpos=True))
         self.reset()
 
-    # The legs' policy owns the fault latch and its counter; read-only here (mypy: a property for an attribute).
     @property
-    def latched_fault(self) -> str | None:  # type: ignore[override]
+    def latched_fault(self) -> str | None:  # the legs' policy owns the fault latch and its counter
         return self.legs.latched_fault
 
     @property
-    def nonfinite_events(self) -> int:  # type: ignore[override]
+    def nonfinite_events(self) -> int:
         return self.legs.nonfinite_events
 
     def reset(self) -> None:

@@ -8,6 +8,7 @@ mismatch is a `PolicyError` naming the file and what to fix.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import numpy as np
 import onnxruntime as ort
 
 from hw.errors import ConfigError, PolicyError
-from hw.types import FloatArray
+from hw.types import FloatArray, read_only
 
 
 def read_metadata(session: ort.InferenceSession) -> dict[str, object]:
@@ -76,3 +77,41 @@ def _json_or_text(text: str) -> object:
         return json.loads(text)
     except json.JSONDecodeError:
         return text
+
+
+class ActionFilter:
+    """Policy outputs to PD targets: clipped, scaled around the default pose.
+
+    A non-finite output holds the last safe target; `limit` of them in a row latch a
+    fault (`latched_fault`), after which the tracker damps. Every one is counted.
+    """
+
+    def __init__(self, scale: FloatArray, default_pos: FloatArray, clip: float, limit: int) -> None:
+        self.scale = scale
+        self.default_pos = default_pos
+        self.clip = clip
+        self.limit = limit
+        self.nonfinite_events = 0
+        self.reset()
+
+    def reset(self) -> None:
+        self.last_action = np.zeros(len(self.default_pos))
+        self.last_target: FloatArray = self.default_pos
+        self.latched_fault: str | None = None
+        self._consecutive_bad = 0
+
+    def target(self, action: FloatArray) -> FloatArray | None:
+        """The target for this tick's `action`; None once a fault is latched (damp)."""
+        if self.latched_fault is not None:
+            return None
+        if not math.isfinite(float(action.sum())):  # one reduction catches any NaN or inf
+            self.nonfinite_events += 1
+            self._consecutive_bad += 1
+            if self._consecutive_bad >= self.limit:
+                self.latched_fault = f"policy produced non-finite actions {self._consecutive_bad} ticks in a row"
+                return None
+            return self.last_target
+        self._consecutive_bad = 0
+        self.last_action = np.minimum(np.maximum(action, -self.clip), self.clip)
+        self.last_target = read_only(self.last_action * self.scale + self.default_pos)
+        return self.last_target

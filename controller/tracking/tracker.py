@@ -19,9 +19,17 @@ class Tracker(abc.ABC):
     rate_hz: float  # how often `step` must be called
     joint_names: tuple[str, ...]  # order of the joint arrays of every command it returns
     command_limits: CommandLimits  # the velocities it can follow: inputs scale their sticks to these
-    latched_fault: str | None  # set when it stopped producing safe commands (the run damps)
-    nonfinite_events: int  # non-finite outputs it caught (counted in the report)
     needs_plan: bool = False  # it follows planned frames: a run without the planner is refused before it starts
+
+    @property
+    @abc.abstractmethod
+    def latched_fault(self) -> str | None:
+        """Set when it stopped producing safe commands (the run damps)."""
+
+    @property
+    @abc.abstractmethod
+    def nonfinite_events(self) -> int:
+        """Non-finite outputs it caught (counted in the report)."""
 
     @abc.abstractmethod
     def step(self, state: RobotState, reference: ReferenceWindow) -> JointCommand:

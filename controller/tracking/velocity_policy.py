@@ -18,7 +18,7 @@ from controller.inputs.base import CommandLimits, VelocityCommand
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
-from controller.tracking.onnx_policy import check_io, joint_gains, metadata_joint_names, read_metadata
+from controller.tracking.onnx_policy import ActionFilter, check_io, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.tracker import Tracker
 from hw import quat
 from hw.errors import ConfigError, PolicyError
@@ -118,17 +118,30 @@ class VelocityPolicy(Tracker):
         self._slot = {t.name: self.obs.slot(t.name) for t in cfg.observation.terms}
         self._zeros = read_only(np.zeros(n))
         self._damp_kd = read_only(np.full(n, cfg.damping_kd))
-        self.nonfinite_events = 0
-        self.latched_fault: str | None = None
+        self.actions = ActionFilter(self.action_scale, self.default_pos, cfg.action_clip, cfg.max_consecutive_nonfinite)
         self.reset()
+
+    @property
+    def latched_fault(self) -> str | None:
+        return self.actions.latched_fault
+
+    @property
+    def nonfinite_events(self) -> int:
+        return self.actions.nonfinite_events
+
+    @property
+    def last_action(self) -> FloatArray:
+        return self.actions.last_action
+
+    @property
+    def last_target(self) -> FloatArray:
+        """The last safe joint target (held through a non-finite output, and while damping)."""
+        return self.actions.last_target
 
     def reset(self) -> None:
         self.obs.reset()
         self.gait.reset()
-        self.last_action = np.zeros(len(self.joint_names))
-        self.last_target = self.default_pos
-        self._consecutive_bad = 0
-        self.latched_fault = None
+        self.actions.reset()
 
     def observe(self, state: RobotState, command: VelocityCommand) -> np.ndarray:
         """Assemble the policy input for this tick (raw values into their slots, then one scaling)."""
@@ -164,21 +177,9 @@ class VelocityPolicy(Tracker):
         if self.latched_fault is not None:
             return self.damping_command()
         command = reference.velocity
-        action = self.infer(self.observe(state, command))
-        if not math.isfinite(float(action.sum())):  # one reduction catches any NaN or inf
-            self.nonfinite_events += 1
-            self._consecutive_bad += 1
-            if self._consecutive_bad >= self.cfg.max_consecutive_nonfinite:
-                self.latched_fault = f"policy produced non-finite actions {self._consecutive_bad} ticks in a row"
-                return self.damping_command()
-            target = self.last_target
-        else:
-            self._consecutive_bad = 0
-            clip = self.cfg.action_clip
-            action = np.minimum(np.maximum(action, -clip), clip)
-            self.last_action = action
-            target = read_only(action * self.action_scale + self.default_pos)
-            self.last_target = target
+        target = self.actions.target(self.infer(self.observe(state, command)))
+        if target is None:
+            return self.damping_command()
         self.gait.advance(command)
         return JointCommand(q=target, dq=self._zeros, kp=self.kp, kd=self.kd, tau_ff=self._zeros)
 

@@ -52,7 +52,7 @@ from controller.inputs.base import CommandLimits
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
-from controller.tracking.onnx_policy import check_io, joint_gains, metadata_joint_names, read_metadata
+from controller.tracking.onnx_policy import ActionFilter, check_io, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.presets import available_policies, policy_config_path
 from controller.tracking.tracker import Tracker
 from hw import g1
@@ -141,8 +141,7 @@ class WholeBodyTracker(Tracker):
         self._slot = {t.name: self.obs.slot(t.name) for t in cfg.observation.terms}
         self._zeros = read_only(np.zeros(n))
         self._damp_kd = read_only(np.full(n, cfg.damping_kd))
-        self.nonfinite_events = 0
-        self.latched_fault: str | None = None
+        self.actions = ActionFilter(self.action_scale, self.default_pos, cfg.action_clip, cfg.max_consecutive_nonfinite)
         self.reset()
 
     # -- loading -------------------------------------------------------------------------
@@ -182,15 +181,24 @@ class WholeBodyTracker(Tracker):
     # -- running -------------------------------------------------------------------------
 
     @property
+    def latched_fault(self) -> str | None:
+        return self.actions.latched_fault
+
+    @property
+    def nonfinite_events(self) -> int:
+        return self.actions.nonfinite_events
+
+    @property
+    def last_action(self) -> FloatArray:
+        return self.actions.last_action
+
+    @property
     def last_target(self) -> FloatArray:
-        return self._last_target
+        return self.actions.last_target
 
     def reset(self) -> None:
         self.obs.reset()
-        self.last_action = np.zeros(len(self.joint_names))
-        self._last_target = self.default_pos
-        self._consecutive_bad = 0
-        self.latched_fault = None
+        self.actions.reset()
         self._yaw_offset: Quat | None = None  # captured at the first step: robot torso yaw minus reference torso yaw
 
     def observe(self, state: RobotState, reference: ReferenceWindow) -> np.ndarray:
@@ -248,25 +256,13 @@ class WholeBodyTracker(Tracker):
         """One control tick. A non-finite output holds the last safe target; repeated ones latch damping."""
         if self.latched_fault is not None:
             return self.damping_command()
-        action = self.infer(self.observe(state, reference))
-        if not math.isfinite(float(action.sum())):  # one reduction catches any NaN or inf
-            self.nonfinite_events += 1
-            self._consecutive_bad += 1
-            if self._consecutive_bad >= self.cfg.max_consecutive_nonfinite:
-                self.latched_fault = f"policy produced non-finite actions {self._consecutive_bad} ticks in a row"
-                return self.damping_command()
-            target = self._last_target
-        else:
-            self._consecutive_bad = 0
-            clip = self.cfg.action_clip
-            action = np.minimum(np.maximum(action, -clip), clip)
-            self.last_action = action
-            target = read_only(action * self.action_scale + self.default_pos)
-            self._last_target = target
+        target = self.actions.target(self.infer(self.observe(state, reference)))
+        if target is None:
+            return self.damping_command()
         return JointCommand(q=target, dq=self._zeros, kp=self.kp, kd=self.kd, tau_ff=self._zeros)
 
     def damping_command(self) -> JointCommand:
-        return JointCommand(q=self._last_target, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros)
+        return JointCommand(q=self.last_target, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros)
 
 
 def torso_quat(pelvis_quat: FloatArray, waist: FloatArray) -> Quat:
