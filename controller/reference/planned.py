@@ -77,19 +77,19 @@ class PlannedReference(ReferenceSource):
         if self.follower is not None:
             self.follower.start(state)
 
-    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
         t = state.time
         now = self.buffer.sample(t)
         # Standing in place the plan stays where the robot stood (measured on `wave`: moving it onto a robot that
         # sways with raised arms made both trackers fall, 1-3 times in 12 s; left in place, none did).
-        moving = self.follower is not None or not velocity.is_zero(0.05)
+        moving = (self.follower is not None and not hold) or not velocity.is_zero(0.05)
         drift = self._drift(now.qpos, state) if state.has_base_position and moving else None
         if drift is not None:
             self.buffer.move(lambda frames: shift_frames(frames, *drift))
             self.resyncs += 1
             now = self.buffer.sample(t)
         planned = velocity  # what the planner is asked for
-        if self.follower is not None:  # the legs walk the robot to the target, the planner walks the plan there
+        if self.follower is not None and not hold:  # the legs walk the robot to the target, the planner walks the plan there
             velocity = self.follower.command(state)
             planned = self.follower.plan_command(self.buffer.sample(t).qpos, self.cfg.locomotion.spring)
         changed = self._last_command is None or _differs(planned, self._last_command, self.cfg.command_change)

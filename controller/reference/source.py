@@ -18,8 +18,11 @@ class ReferenceSource(abc.ABC):
         """The run begins with the robot in `state`."""
 
     @abc.abstractmethod
-    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
-        """The reference of this tick, given the robot's state, the supervised velocity command and the gesture asked for."""
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
+        """The reference of this tick, given the robot's state, the supervised velocity command and the gesture asked for.
+
+        `hold`: the supervisor stands or damps the robot: no mode may move it (waypoints wait).
+        """
 
     def report(self) -> dict[str, Any]:
         """Counters for the run report."""
@@ -32,5 +35,5 @@ class ReferenceSource(abc.ABC):
 class CommandReference(ReferenceSource):
     """The velocity command itself is the reference (the velocity tracker's own input)."""
 
-    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
-        return ReferenceWindow(state.time, velocity)  # gestures need the planner
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
+        return ReferenceWindow(state.time, velocity)  # gestures need the planner; a held robot already has a zero command

@@ -254,8 +254,8 @@ class WaypointReference(ReferenceSource):
     def start(self, state: RobotState) -> None:
         self.follower.start(state)
 
-    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "") -> ReferenceWindow:
-        return ReferenceWindow(state.time, self.follower.command(state))  # gestures need the planner
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
+        return ReferenceWindow(state.time, velocity if hold else self.follower.command(state))  # gestures need the planner
 
     def report(self) -> dict[str, Any]:
         return self.follower.report()

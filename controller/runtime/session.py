@@ -54,8 +54,8 @@ class Session:
             self.damp_time = round(state.time - self.start_time, 4)
         measured = backend.truth() or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
-        gesture = sample.gesture if supervisor.mode is Mode.RUN else ""  # standing or damped: arms down
-        window = self.reference.window(state, velocity, gesture)
+        running = supervisor.mode is Mode.RUN
+        window = self.reference.window(state, velocity, sample.gesture if running else "", hold=not running)
         self.last_window = window
         if window.plan is not None and supervisor.mode is not Mode.DAMP:
             self.plan_metrics.record(state.time, measured, window.plan)

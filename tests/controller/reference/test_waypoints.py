@@ -146,6 +146,8 @@ def test_the_reference_without_planner_follows_the_follower_not_the_supervised_c
     window = ref.window(state(0.0, 0.0, 0.0), VelocityCommand())
     assert window.velocity.vx == pytest.approx(CFG.max_speed) and window.plan is None
     assert ref.report()["waypoints_reached"] == 0
+    held = ref.window(state(0.02, 0.0, 0.0), VelocityCommand(), hold=True)  # the stop button: the waypoints wait
+    assert held.velocity.is_zero()
 
 
 def test_the_plan_walks_to_the_target_from_where_the_plan_is_without_floor_or_stop_band() -> None:
