@@ -11,10 +11,11 @@ Every control tick calls `update(t, replan_now)`. The scheduler then
   executed at the splice time, so the new plan continues what the robot will be doing.
 
 Plans run on a worker thread (onnxruntime releases the GIL), so a tick never waits for
-one on the real-time clock. On the simulated clock a plan becomes available a configured
-latency after its request, in simulated time, whatever the machine's speed: the loop
-waits for the worker there, and runs stay reproducible for a seed. The real cost of
-every plan is recorded either way.
+one on the real-time clock; its latency is the wall time from request to use. On the
+simulated clock a plan becomes available a configured latency after its request, in
+simulated time, whatever the machine's speed: the loop waits for the worker right at the
+request (simulated time stands still meanwhile, and nothing else competes for the cores,
+so the recorded latency is the plan's own cost), and runs stay reproducible for a seed.
 
 A planner that raises, returns NaN or stalls past `stall_timeout_s` is a failure: it is
 logged and counted, the buffer being executed runs out, and the reference then holds
@@ -78,6 +79,7 @@ class _InFlight:
     splice_time: float  # run time of the plan's first frame
     ready_at: float | None  # simulated clock: when the plan becomes available; None on the real-time clock
     submitted_wall: float
+    cost_s: float | None = None  # simulated clock: wall seconds the plan took (None: it stalled)
 
 
 class ReplanScheduler:
@@ -133,18 +135,21 @@ class ReplanScheduler:
             self._restart_worker()
             self._next_request = t + self.cfg.period_s
             return
-        self._in_flight = _InFlight(future, t, splice_time, ready_at, time.perf_counter())
+        submitted = time.perf_counter()
+        cost = None
+        if ready_at is not None and wait([future], timeout=self.cfg.stall_timeout_s).done:
+            cost = time.perf_counter() - submitted
+        self._in_flight = _InFlight(future, t, splice_time, ready_at, submitted, cost)
         self.counters.requests += 1
         self._next_request = t + self.cfg.period_s
 
     def _collect(self, t: float) -> None:
         flight = self._in_flight
         assert flight is not None
-        if flight.ready_at is not None:  # simulated clock: wait for the plan in wall time, not in simulated time
+        if flight.ready_at is not None:  # simulated clock: the plan was waited for at the request
             if t < flight.ready_at - 1e-9:
                 return
-            timeout = max(self.cfg.stall_timeout_s - (time.perf_counter() - flight.submitted_wall), 0.0)
-            if not wait([flight.future], timeout=timeout).done:
+            if flight.cost_s is None:
                 self._in_flight = None
                 self._fail(f"the planner stalled (no plan after {self.cfg.stall_timeout_s} s)")
                 self._restart_worker()
@@ -156,7 +161,7 @@ class ReplanScheduler:
                 self._restart_worker()
             return
         self._in_flight = None
-        self.plan_latencies_s.append(time.perf_counter() - flight.submitted_wall)
+        self.plan_latencies_s.append(flight.cost_s if flight.cost_s is not None else time.perf_counter() - flight.submitted_wall)
         error = flight.future.exception()
         if error is not None:
             self._fail(f"the planner raised {type(error).__name__}: {error}")
