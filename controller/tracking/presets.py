@@ -22,7 +22,11 @@ def load_policy(name_or_path: str, assets: Assets, robot_joint_names: tuple[str,
     """Load a policy preset and its ONNX file, checked against the robot's joints."""
     cfg_path = policy_config_path(name_or_path)
     cfg = load_config(PolicyConfig, cfg_path)
-    onnx_path = assets.policy(cfg.onnx)
-    if not Path(cfg.onnx).is_absolute() and (cfg_path.parent / cfg.onnx).is_file():
-        onnx_path = cfg_path.parent / cfg.onnx
-    return VelocityPolicy(onnx_path, cfg, robot_joint_names, source=str(cfg_path))
+    return VelocityPolicy(onnx_file(cfg.onnx, cfg_path, assets), cfg, robot_joint_names, source=str(cfg_path))
+
+
+def onnx_file(name: str, cfg_path: Path, assets: Assets) -> Path:
+    """A preset's ONNX file: beside its YAML when it is there, else in the asset cache (or a path)."""
+    if not Path(name).is_absolute() and (cfg_path.parent / name).is_file():
+        return cfg_path.parent / name
+    return assets.policy(name)

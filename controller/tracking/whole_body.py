@@ -53,7 +53,7 @@ from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
 from controller.tracking.onnx_policy import ActionFilter, check_io, joint_gains, metadata_joint_names, read_metadata
-from controller.tracking.presets import available_policies, policy_config_path
+from controller.tracking.presets import available_policies, onnx_file, policy_config_path
 from controller.tracking.tracker import Tracker
 from hw import g1
 from hw.errors import ConfigError, PolicyError
@@ -317,7 +317,4 @@ def load_whole_body(name_or_path: str, assets: Assets, robot_joint_names: tuple[
     """Load a whole-body preset (name or YAML path) and its ONNX file, checked against the robot's joints."""
     cfg_path = policy_config_path(name_or_path)
     cfg = load_config(WholeBodyConfig, cfg_path)
-    onnx_path = assets.policy(cfg.onnx)
-    if not Path(cfg.onnx).is_absolute() and (cfg_path.parent / cfg.onnx).is_file():
-        onnx_path = cfg_path.parent / cfg.onnx
-    return WholeBodyTracker(onnx_path, cfg, robot_joint_names, source=str(cfg_path))
+    return WholeBodyTracker(onnx_file(cfg.onnx, cfg_path, assets), cfg, robot_joint_names, source=str(cfg_path))
