@@ -91,7 +91,7 @@ class PlannedReference(ReferenceSource):
         planned = velocity  # what the planner is asked for
         if self.follower is not None and not hold:  # the legs walk the robot to the target, the planner walks the plan there
             velocity = self.follower.command(state)
-            planned = self.follower.plan_command(self.buffer.sample(t).qpos, self.cfg.locomotion.spring)
+            planned = self.follower.plan_command(now.qpos, self.cfg.locomotion.spring)
         changed = self._last_command is None or _differs(planned, self._last_command, self.cfg.command_change)
         changed = self.locomotion.set_gesture(gesture, t) or changed
         if changed:
