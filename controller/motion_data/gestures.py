@@ -33,6 +33,8 @@ GESTURE_PHRASES: dict[str, str] = {
     "point": "pointing to the front right",
     "arms_crossed": "with arms crossed",
     "hands_on_hips": "with hands on hips",
+    "wave_left": "waving the left hand",
+    "wave_both": "waving both hands",
 }
 
 
@@ -67,6 +69,8 @@ _POINT = {"shoulder_pitch": -1.75, "shoulder_roll": 0.5, "shoulder_yaw": 0.0, "e
 _HIPS = {"shoulder_pitch": -0.1, "shoulder_roll": 1.16, "shoulder_yaw": -1.81, "elbow": -0.23, "wrist_roll": 0.0, "wrist_pitch": 0.0}
 POSES: dict[str, dict[str, float]] = {
     "wave": _arm("right", **_WAVE),
+    "wave_left": _arm("left", **_WAVE),
+    "wave_both": {**_arm("left", **_WAVE), **_arm("right", **_WAVE)},
     "raise_left": _arm("left", **_RAISED),
     "raise_right": _arm("right", **_RAISED),
     "raise_both": {**_arm("left", **_RAISED), **_arm("right", **_RAISED)},
@@ -81,6 +85,8 @@ POSES: dict[str, dict[str, float]] = {
 # Periodic parts: joint -> (amplitude rad, frequency Hz).
 MOTIONS: dict[str, dict[str, tuple[float, float]]] = {
     "wave": {"right_elbow_joint": (0.4, 1.5)},
+    "wave_left": {"left_elbow_joint": (0.4, 1.5)},
+    "wave_both": {"left_elbow_joint": (0.4, 1.5), "right_elbow_joint": (0.4, 1.5)},
     "reach": {"right_shoulder_pitch_joint": (0.12, 0.4), "right_elbow_joint": (0.12, 0.4)},
     "point": {"waist_yaw_joint": (0.08, 0.3)},
 }

@@ -1,0 +1,1 @@
+"""Text planning: prompts split into clauses, resolved into behaviour programs, composed and executed."""

@@ -1,0 +1,110 @@
+"""Behaviour programs: what a prompt resolves to, one clause after the other.
+
+A clause is a base motion (where the root goes, in the robot's frame at the clause's
+start) with upper-body edits layered on it (gestures, CoMA's body-part split), a
+minimum duration (a wave lasts a while even standing still) and optionally a clip of the
+dataset. Everything a clause needs to run is resolved here, before anything moves: the
+executor never reads text. Pure data, no MuJoCo, no torch.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from hw.errors import G1Error
+
+# Gestures a clause can ask for, by the names reports use. The executor plays them with the
+# gesture library of the planner in the loop (`reference.gestures`), whose right-hand wave is "wave".
+GESTURE_NAMES: tuple[str, ...] = (
+    "wave_left", "wave_right", "wave_both", "raise_left", "raise_right", "raise_both",
+    "reach", "point", "arms_crossed", "hands_on_hips",
+)  # fmt: skip
+DETECTED_GESTURES: tuple[str, ...] = GESTURE_NAMES[:6]  # what the motion detector recognizes in executed arm motion
+LIBRARY_NAME = {"wave_right": "wave"}  # report name -> gesture library name, where they differ
+
+
+def library_gesture(name: str) -> str:
+    """The gesture library's name for a report gesture name."""
+    return LIBRARY_NAME.get(name, name)
+
+
+class PromptRefused(G1Error, ValueError):
+    """A prompt (or a part of it) that the stack cannot plan; the message names the part and what can be done."""
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """A root target in the frame of the robot at the clause's start: forward, left (m), heading change (deg, + left)."""
+
+    forward_m: float
+    left_m: float
+    heading_deg: float
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The clause's base motion: root targets reached in order, at a planar speed and turning rate.
+
+    The last waypoint is where the clause ends. A turn of more than half a revolution is
+    several waypoints (the follower turns the short way to each).
+    """
+
+    waypoints: tuple[Waypoint, ...]
+    speed_mps: float = 0.5
+    yaw_rate: float = 0.8  # rad/s
+
+    def __post_init__(self) -> None:
+        if not self.waypoints:
+            raise ValueError("a motion needs at least one waypoint")
+        if not (0.0 < self.speed_mps <= 1.5 and 0.0 < self.yaw_rate <= 2.0):
+            raise ValueError(f"motion speed {self.speed_mps} m/s or turning rate {self.yaw_rate} rad/s out of range")
+
+    @property
+    def end(self) -> Waypoint:
+        return self.waypoints[-1]
+
+
+@dataclass(frozen=True)
+class Clause:
+    """One ordered part of a prompt and the behaviour it resolved to.
+
+    `motion` None: the robot stays where it is (a gesture, a pause). `min_duration_s`: the
+    clause lasts at least this long (a wave of 3 s, "wait two seconds"); with a motion it
+    lasts until the robot has arrived and this long has passed. `quantities`: what was read
+    from the text (for printing and reports), e.g. {"distance_m": 2.0, "turn_deg": 90}.
+    """
+
+    text: str
+    motion: Motion | None = None
+    gestures: tuple[str, ...] = ()
+    min_duration_s: float = 0.0
+    clip: str | None = None
+    quantities: dict[str, float | str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        unknown = [g for g in self.gestures if g not in GESTURE_NAMES]
+        if unknown:
+            raise ValueError(f"unknown gestures {unknown}; valid: {', '.join(GESTURE_NAMES)}")
+        if not (math.isfinite(self.min_duration_s) and self.min_duration_s >= 0):
+            raise ValueError(f"min_duration_s must be a non-negative number, got {self.min_duration_s}")
+
+    @property
+    def displacement(self) -> tuple[float, float, float]:
+        """(forward m, left m, heading change deg) the clause asks for, in its start frame."""
+        if self.motion is None:
+            return (0.0, 0.0, 0.0)
+        end = self.motion.end
+        return (end.forward_m, end.left_m, end.heading_deg)
+
+
+@dataclass(frozen=True)
+class Program:
+    """A prompt resolved: its clauses in order."""
+
+    prompt: str
+    clauses: tuple[Clause, ...]
+
+    def __post_init__(self) -> None:
+        if not self.clauses:
+            raise ValueError("a program needs at least one clause")
