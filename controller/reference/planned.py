@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from controller.inputs.base import VelocityCommand
-from controller.planner.request import Plan, PlanRequest
+from controller.planner.request import CONTEXT_FRAMES, Plan, PlanRequest
 from controller.reference.buffer import ReferenceBuffer
 from controller.reference.locomotion import LocomotionConfig, SmartLocomotion
 from controller.reference.scheduler import ReplanScheduler, SchedulerConfig
@@ -63,9 +63,27 @@ class PlannedReference(ReferenceSource):
         self.follower = follower
         self.buffer = ReferenceBuffer()
         self.locomotion = SmartLocomotion(cfg.locomotion, seed)
-        self.scheduler = ReplanScheduler(plan, self.locomotion.request, self.buffer, cfg.scheduler, simulated_clock, joint_limits)
+        self.scheduler = ReplanScheduler(plan, self._request, self.buffer, cfg.scheduler, simulated_clock, joint_limits)
         self._last_command: VelocityCommand | None = None
         self.resyncs = 0
+        self._segment_start: tuple[int, bool] | None = None  # a new segment asked for: (crossfade frames, with its context)
+        self._fresh_context = False  # the plan being asked for starts from a standing pose, not the buffer (naive joins)
+
+    def start_segment(self, blend_frames: int | None) -> None:
+        """Ask for a plan at once that starts a new segment (the next clause of a text plan).
+
+        `blend_frames`: it continues the executed motion (the buffer's context) and is blended
+        into it over this many frames (Text2BFM-Compose's overlap). None: naive concatenation,
+        the baseline that blending is compared against: planned from a standing pose at the
+        same root, as if on its own, and spliced with no blend.
+        """
+        self._segment_start = (0, False) if blend_frames is None else (blend_frames, True)
+
+    def _request(self, context: FloatArray, splice_time: float) -> PlanRequest:
+        if self._fresh_context:
+            self._fresh_context = False
+            context = standing_context(context[-1])
+        return self.locomotion.request(context, splice_time)
 
     def start(self, state: RobotState) -> None:
         """Hold the robot's measured pose until the first plan arrives."""
@@ -97,7 +115,11 @@ class PlannedReference(ReferenceSource):
         if changed:
             self._last_command = planned
         self.locomotion.command = planned
-        self.scheduler.update(t, replan_now=changed)
+        crossfade = None
+        if self._segment_start is not None:
+            (crossfade, with_context), self._segment_start = self._segment_start, None
+            self._fresh_context, changed = not with_context, True
+        self.scheduler.update(t, replan_now=changed, crossfade_frames=crossfade)
         return ReferenceWindow(
             t,
             velocity,
@@ -139,6 +161,14 @@ def shift_frames(frames: FloatArray, source: FloatArray, target: FloatArray) -> 
     out[:, 1] = target[1] + s * rel[:, 0] + c * rel[:, 1]
     out[:, g1.QPOS_ROOT_QUAT] = quat.multiply(quat.from_yaw(turn), out[:, g1.QPOS_ROOT_QUAT])
     return out
+
+
+def standing_context(last: FloatArray) -> FloatArray:
+    """A context of 4 frames standing still in the default pose where `last` (qpos [36]) has its root (x, y, heading)."""
+    frame = np.array(g1.standing_qpos())
+    frame[:2] = last[:2]
+    frame[g1.QPOS_ROOT_QUAT] = quat.from_yaw(float(quat.heading(last[g1.QPOS_ROOT_QUAT])))
+    return np.tile(frame, (CONTEXT_FRAMES, 1))
 
 
 def _differs(a: VelocityCommand, b: VelocityCommand, tol: float) -> bool:

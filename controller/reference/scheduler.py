@@ -80,6 +80,7 @@ class _InFlight:
     ready_at: float | None  # simulated clock: when the plan becomes available; None on the real-time clock
     submitted_wall: float
     cost_s: float | None = None  # simulated clock: wall seconds the plan took (None: it stalled)
+    crossfade_frames: int = 3  # how the plan is blended into the buffer at its splice
 
 
 class ReplanScheduler:
@@ -112,14 +113,18 @@ class ReplanScheduler:
         self._in_flight: _InFlight | None = None
         self._next_request = -math.inf
 
-    def update(self, t: float, replan_now: bool = False) -> None:
-        """One control tick at run time `t`: take in a finished plan, ask for the next one when due."""
+    def update(self, t: float, replan_now: bool = False, crossfade_frames: int | None = None) -> None:
+        """One control tick at run time `t`: take in a finished plan, ask for the next one when due.
+
+        `crossfade_frames`: the blend of the plan asked for on this tick, if one is (None: the configured one);
+        a longer overlap joins two clauses of a text plan.
+        """
         if self._in_flight is not None:
             self._collect(t)
         if self._in_flight is None and (replan_now or t >= self._next_request - 1e-9):
-            self._request(t)
+            self._request(t, self.cfg.crossfade_frames if crossfade_frames is None else crossfade_frames)
 
-    def _request(self, t: float) -> None:
+    def _request(self, t: float, crossfade_frames: int) -> None:
         splice_time = t + self.cfg.lookahead_s
         try:
             request = self._make_request(self.buffer.context(splice_time), splice_time)
@@ -139,7 +144,7 @@ class ReplanScheduler:
         cost = None
         if ready_at is not None and wait([future], timeout=self.cfg.stall_timeout_s).done:
             cost = time.perf_counter() - submitted
-        self._in_flight = _InFlight(future, t, splice_time, ready_at, submitted, cost)
+        self._in_flight = _InFlight(future, t, splice_time, ready_at, submitted, cost, crossfade_frames)
         self.counters.requests += 1
         self._next_request = t + self.cfg.period_s
 
@@ -180,7 +185,7 @@ class ReplanScheduler:
                 flight.splice_time,
             )
             return
-        self.buffer.splice(frames, flight.splice_time + 1.0 / FPS, self.cfg.crossfade_frames)
+        self.buffer.splice(frames, flight.splice_time + 1.0 / FPS, flight.crossfade_frames)
         self.counters.replans += 1
 
     def _checked(self, plan: Plan) -> FloatArray | None:

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
 
@@ -34,6 +35,11 @@ from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_hardware_config
 from sim.robot import SimRobot
 from sim.world import build_model
+
+if TYPE_CHECKING:
+    from controller.inputs.base import CommandLimits
+    from controller.reference.planned import PlannedReference
+    from controller.reference.source import ReferenceSource
 
 
 @dataclass(frozen=True)
@@ -57,6 +63,19 @@ class SimRunConfig:
     faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
     picture: Path | None = None  # PNG of the final frame
     status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
+
+
+@dataclass(frozen=True)
+class RunHooks:
+    """What a job built on `g1ctl sim` adds (the text planner): its reference source over the planned one, a caption, an early end.
+
+    `wrap_reference(planned, limits)` returns the source the session ticks; `caption()` is
+    written on each video frame; `done()` ends the run before its duration.
+    """
+
+    wrap_reference: Callable[[PlannedReference, CommandLimits], ReferenceSource]
+    caption: Callable[[], str] | None = None
+    done: Callable[[], bool] | None = None
 
 
 def _check(cfg: SimRunConfig) -> float | None:
@@ -85,6 +104,7 @@ class _BuiltRun:
     bar: tqdm[Any]
     ghost: Any = None  # sim.render.Ghost drawing the plan in the viewer
     status: StatusLine | None = None
+    hooks: RunHooks | None = None
 
 
 @dataclass(frozen=True)
@@ -94,14 +114,16 @@ class _Outcome:
     error: Exception | None
 
 
-def run(cfg: SimRunConfig) -> dict[str, Any]:
+def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
     """Run the scenario and return the report (also written to `cfg.report` when set).
 
     Raises `RunAborted` (after writing the report) when an exception ended the run.
     """
     duration = _check(cfg)
+    if hooks is not None and not cfg.planner:
+        raise ConfigError("this run plans whole-body motion: it needs the planner in the loop (planner=True)")
     with ExitStack() as stack:
-        built = _build(cfg, duration, stack)
+        built = _build(cfg, duration, stack, hooks)
         outcome = _drive(built, duration)
         report = _report(cfg, built, outcome)
         if cfg.picture is not None:
@@ -121,7 +143,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     return report
 
 
-def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _BuiltRun:
+def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: RunHooks | None = None) -> _BuiltRun:
     """The G1 in MuJoCo, the tracker by name, the backend, the input and the outputs; all closed by `stack`."""
     assets = ensure_assets(cfg.assets_dir)
     robot = SimRobot(build_model(assets.g1_mjcf))
@@ -146,7 +168,6 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
         viewer = stack.enter_context(open_viewer(robot.model, robot.data))
     total = round(duration * tracker.rate_hz) if duration else None
     bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not cfg.progress, desc=f"sim {cfg.scenario}", file=sys.stderr))
-    from controller.reference.source import ReferenceSource  # noqa: PLC0415
     from controller.reference.waypoints import WaypointFollower, WaypointReference  # noqa: PLC0415
 
     reference: ReferenceSource | None = None
@@ -158,10 +179,11 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
 
         planner = Planner.load()
         planner.warm_up()
-        reference = PlannedReference(
+        planned = PlannedReference(
             planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed, follower=follower
         )
-        stack.callback(reference.close)
+        stack.callback(planned.close)
+        reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits)
     elif follower is not None:
         reference = WaypointReference(follower)
     session = Session(backend, tracker, source, reference)
@@ -174,12 +196,15 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack) -> _Buil
     if cfg.status:
         status = StatusLine(sys.stderr)
         stack.callback(status.close)
-    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost, status)
+    return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost, status, hooks)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
     """Bring the backend up and tick until the end, a fall that ends the run, a fault at bring-up, Ctrl-C or an exception."""
     session = run.session
+    hooks = run.hooks
+    caption = hooks.caption if hooks is not None else None
+    done = hooks.done if hooks is not None else None
     interrupted, error = False, None
     wall_start = time.perf_counter()
     try:
@@ -189,14 +214,14 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
             window = session.last_window
             ghost = window.plan.qpos if window is not None and window.plan is not None else None
             if run.recorder is not None:
-                run.recorder.maybe_capture(run.robot.data, ghost)
+                run.recorder.maybe_capture(run.robot.data, ghost, caption() if caption is not None else None)
             if run.viewer is not None:
                 _sync_viewer(run.viewer, run.ghost, ghost)
             if run.status is not None:
                 run.status.update(session)
             if tick % 10 == 9:
                 run.bar.update(10)
-            if not going_on:
+            if not going_on or (done is not None and done()):
                 break
     except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
         session.fail(str(exc))

@@ -1,0 +1,245 @@
+"""Executing a behaviour program: clause after clause through the planner in the loop, corrected on the way.
+
+`TextReference` is a reference source: the session ticks it like any other. It runs the
+clauses in order on top of a `PlannedReference` (10 Hz replanning, the reference buffer,
+the gesture library):
+
+- A clause with a base motion gets a `WaypointFollower` on its waypoints; the legs follow
+  the measured root to them and the planner walks its own root there (waypoints mode).
+  A clause without one stands where it is (no follower: the plan stays put under a robot
+  that sways with raised arms, see `PlannedReference`).
+- Gestures are upper-body edits on whatever the base motion does (CoMA's body-part split):
+  the gesture library's arm keyframes, layered on each plan.
+- Self-correction: each clause's targets are placed from the pose the program *intended*
+  at its start (the composition of the earlier clauses' goals), not from where the robot
+  happens to stand, and the follower closes the loop on the measured root. A clause that
+  ended 5 cm short is made good by the next one: errors do not accumulate.
+- Composition: at each boundary the next clause's first plan is asked for at once, with
+  the executed motion as its context, and blended into it over `blend_frames` frames
+  (Text2BFM-Compose's overlap). With `blend_frames=None` the clauses are concatenated
+  naively (planned from a standing pose, no blend): the baseline blending is judged against.
+- The clause's text conditions the planner's text slot, when the planner was trained so.
+
+A clause ends when its follower has settled on the last target and its minimum duration
+has passed, or, failing that, after a timeout (reported). Everything measured per clause
+(start and end pose, unwrapped heading change, the executed frames) is kept for the
+report. No MuJoCo, no torch.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from controller.inputs.base import ZERO, CommandLimits, VelocityCommand
+from controller.inputs.scripted import Waypoint as WorldWaypoint
+from controller.reference.planned import PlannedReference
+from controller.reference.source import ReferenceSource
+from controller.reference.waypoints import WaypointConfig, WaypointFollower
+from controller.reference.window import ReferenceWindow
+from controller.text.program import Clause, Program, library_gesture
+from hw import g1, quat
+from hw.errors import ConfigError
+from hw.types import FloatArray, RobotState
+
+Pose = tuple[float, float, float]  # x, y (m, world), heading (rad, unwrapped)
+
+
+@dataclass(frozen=True)
+class TextRunConfig:
+    blend_frames: int | None = 8  # overlap of two clauses' plans (frames at 30 fps); None: naive concatenation
+    timeout_margin_s: float = 8.0  # a clause may take twice its estimate plus this before it is given up
+    waypoints: WaypointConfig = field(default_factory=WaypointConfig)
+
+    def __post_init__(self) -> None:
+        if self.blend_frames is not None and self.blend_frames < 1:
+            raise ConfigError(f"blend_frames must be at least 1 (or None for naive concatenation), got {self.blend_frames}")
+
+
+@dataclass
+class ClauseRecord:
+    """What happened while one clause ran (times in seconds from the run's start)."""
+
+    index: int
+    clause: Clause
+    start_s: float
+    start_pose: Pose  # measured
+    intended_start: Pose  # where the program meant this clause to start
+    end_s: float | None = None
+    end_pose: Pose | None = None
+    heading_change: float = 0.0  # rad, measured, unwrapped, positive to the left
+    timed_out: bool = False
+    frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick
+    reference: list[FloatArray] = field(default_factory=list)  # the planned reference's qpos [36], one per tick
+
+    @property
+    def displacement(self) -> tuple[float, float]:
+        """Measured (forward, left) in metres, in the frame of the robot at the clause's start."""
+        if self.end_pose is None:
+            return (0.0, 0.0)
+        return to_frame(self.start_pose, self.end_pose[:2])
+
+
+def to_frame(origin: Pose, point: tuple[float, float] | Pose) -> tuple[float, float]:
+    """`point` (x, y world) in the frame of `origin` (forward, left)."""
+    dx, dy = point[0] - origin[0], point[1] - origin[1]
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    return (c * dx + s * dy, -s * dx + c * dy)
+
+
+def from_frame(origin: Pose, forward: float, left: float, turn_rad: float) -> Pose:
+    """The pose `forward`, `left` (m) and `turn_rad` from `origin`, in the world."""
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    return (origin[0] + c * forward - s * left, origin[1] + s * forward + c * left, origin[2] + turn_rad)
+
+
+def estimate_seconds(clause: Clause, intended_start: Pose, pose: Pose) -> float:
+    """How long the clause should take from `pose`: its path at its speed, its turns at its rate, at least its minimum duration."""
+    if clause.motion is None:
+        return clause.min_duration_s
+    motion, seconds, here = clause.motion, 0.0, pose
+    for w in motion.waypoints:
+        target = from_frame(intended_start, w.forward_m, w.left_m, math.radians(w.heading_deg))
+        seconds += math.hypot(target[0] - here[0], target[1] - here[1]) / motion.speed_mps
+        seconds += abs(target[2] - here[2]) / motion.yaw_rate
+        here = target
+    return max(seconds, clause.min_duration_s)
+
+
+class TextReference(ReferenceSource):
+    """Runs a `Program` clause by clause on a `PlannedReference`; `records` hold what each clause did."""
+
+    def __init__(
+        self,
+        program: Program,
+        planned: PlannedReference,
+        cfg: TextRunConfig = TextRunConfig(),
+        limits: CommandLimits | None = None,
+        embed: Callable[[str], FloatArray] | None = None,  # clause text -> the planner's text embedding; None: no text
+    ) -> None:
+        self.program = program
+        self.planned = planned
+        self.cfg = cfg
+        self.limits = limits
+        self.embed = embed
+        self.records: list[ClauseRecord] = []
+        self.finished_at: float | None = None  # run time the last clause ended
+        self.now = 0.0  # run time of the latest tick
+        self._t0 = 0.0
+        self._intended: Pose = (0.0, 0.0, 0.0)
+        self._heading: float | None = None  # last measured heading (wrapped), for unwrapping
+        self._deadline = math.inf
+
+    @property
+    def current(self) -> ClauseRecord | None:
+        """The record of the clause running now (None before the start and once all are done)."""
+        return self.records[-1] if self.records and self.records[-1].end_s is None else None
+
+    @property
+    def caption(self) -> str:
+        """What a video shows: the clause running now."""
+        current = self.current
+        if current is not None:
+            return f"{current.index + 1}/{len(self.program.clauses)}: {current.clause.text}"
+        return "done" if self.finished_at is not None else ""
+
+    def start(self, state: RobotState) -> None:
+        self.planned.start(state)
+        if self.records:  # a restart after a fall: the clause running goes on from where the robot is
+            return
+        self._t0 = state.time
+        self._intended = _pose(state)
+        self._begin(0, state)
+
+    def finished_for(self, seconds: float) -> bool:
+        """The last clause ended at least `seconds` ago (the robot has had time to come to rest)."""
+        return self.finished_at is not None and self.now - self.finished_at >= seconds - 1e-9
+
+    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
+        self.now = state.time - self._t0
+        current = self.current
+        if current is not None and not hold:
+            self._measure(current, state)
+            if self._clause_over(current, state):
+                self._end(current, state)
+                if current.index + 1 < len(self.program.clauses):
+                    self._begin(current.index + 1, state)
+                else:
+                    self.finished_at = state.time - self._t0
+                    self.planned.follower = None
+                    self.planned.locomotion.text_embedding = None
+        running = self.current
+        gestures = running.clause.gestures if running is not None else ()
+        gesture = library_gesture(gestures[0]) if gestures else ""
+        window = self.planned.window(state, ZERO if running is not None else velocity, gesture, hold)
+        if running is not None and window.plan is not None:
+            running.reference.append(np.array(window.plan.qpos))
+        return window
+
+    def _begin(self, index: int, state: RobotState) -> None:
+        clause = self.program.clauses[index]
+        t = state.time - self._t0
+        record = ClauseRecord(index, clause, round(t, 4), _pose(state), self._intended)
+        self._heading = float(quat.heading(state.base_quat))
+        follower = None
+        if clause.motion is not None:
+            waypoints = []
+            for w in clause.motion.waypoints:
+                x, y, h = from_frame(self._intended, w.forward_m, w.left_m, math.radians(w.heading_deg))
+                waypoints.append(WorldWaypoint(x, y, math.degrees(h)))
+            cfg = _with_rates(self.cfg.waypoints, clause.motion.speed_mps, clause.motion.yaw_rate)
+            follower = WaypointFollower(waypoints, cfg, self.limits)
+            follower.start(state)
+            end = clause.motion.end
+            self._intended = from_frame(self._intended, end.forward_m, end.left_m, math.radians(end.heading_deg))
+        self.planned.follower = follower
+        self.planned.locomotion.text_embedding = self.embed(clause.text) if self.embed is not None else None
+        if index > 0:
+            self.planned.start_segment(self.cfg.blend_frames)
+        self._deadline = t + 2.0 * estimate_seconds(clause, record.intended_start, record.start_pose) + self.cfg.timeout_margin_s
+        self.records.append(record)
+
+    def _measure(self, record: ClauseRecord, state: RobotState) -> None:
+        heading = float(quat.heading(state.base_quat))
+        if self._heading is not None:
+            record.heading_change += float(quat.wrap_angle(heading - self._heading))
+        self._heading = heading
+        frame = np.empty(g1.QPOS_SIZE)
+        frame[g1.QPOS_ROOT_POS] = state.base_pos
+        frame[g1.QPOS_ROOT_QUAT] = state.base_quat
+        frame[g1.QPOS_JOINTS] = state.joint_pos
+        record.frames.append(frame)
+
+    def _clause_over(self, record: ClauseRecord, state: RobotState) -> bool:
+        t = state.time - self._t0
+        follower = self.planned.follower
+        arrived = follower is None or follower.done
+        if arrived and t - record.start_s >= record.clause.min_duration_s - 1e-9:
+            return True
+        if t >= self._deadline:
+            record.timed_out = True
+            return True
+        return False
+
+    def _end(self, record: ClauseRecord, state: RobotState) -> None:
+        record.end_s = round(state.time - self._t0, 4)
+        record.end_pose = _pose(state)
+
+    def report(self) -> dict[str, Any]:
+        return self.planned.report() | {"clauses_done": sum(r.end_s is not None for r in self.records)}
+
+    def close(self) -> None:
+        self.planned.close()
+
+
+def _pose(state: RobotState) -> Pose:
+    return (float(state.base_pos[0]), float(state.base_pos[1]), float(quat.heading(state.base_quat)))
+
+
+def _with_rates(cfg: WaypointConfig, speed: float, yaw_rate: float) -> WaypointConfig:
+    """The follower's settings with the clause's speed and turning rate (never below its floors)."""
+    return replace(cfg, max_speed=max(speed, cfg.min_speed), max_yaw_rate=max(yaw_rate, cfg.min_yaw_rate))
