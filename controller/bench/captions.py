@@ -66,7 +66,7 @@ class _Planner(Protocol):
     def sample(self, request: PlanRequest, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]: ...
 
 
-Embed = Callable[[list[str]], FloatArray]
+Embed = Callable[[list[str]], np.ndarray]
 
 
 def validate(cfg: CaptionConfig) -> None:
@@ -124,16 +124,17 @@ def free_plans(
     return out
 
 
-def captioned_windows(
-    planner: _Planner, clips: Sequence[Any], cfg: CaptionConfig, embed: Embed, kin: _Kinematics
-) -> dict[str, Any]:
+def captioned_windows(planner: _Planner, clips: Sequence[Any], cfg: CaptionConfig, embed: Embed, kin: _Kinematics) -> dict[str, Any]:
     """l2p of free and in-betweening plans on captioned test windows: no text, the true caption, a wrong caption."""
     from controller.training.captions import caption_in_force  # noqa: PLC0415 - pure numpy, beside the training code
 
     transition = cfg.length - 1
     by_name = {c.name: c for c in clips}
     picked = []
-    for window in draw_windows(clips, transition, cfg.windows * 4, cfg.seed):
+    rng = np.random.default_rng(cfg.seed)
+    drawn = draw_windows(clips, transition, cfg.windows * 4, cfg.seed)  # in clip order: shuffled, so every clip takes part
+    for i in rng.permutation(len(drawn)):
+        window = drawn[int(i)]
         first = window.start + CONTEXT_FRAMES
         caption = caption_in_force(tuple(by_name[window.clip].captions), first, first + transition, majority=0.9)
         if caption is not None:
@@ -143,7 +144,6 @@ def captioned_windows(
     if not picked:
         raise ConfigError("no test window has one caption in force over its transition; pass a recorded dataset")
     captions = sorted({c for _, c in picked})
-    rng = np.random.default_rng(cfg.seed)
     wrong = [captions[int(rng.integers(len(captions)))] for _ in picked]
     for i, (_, caption) in enumerate(picked):
         while wrong[i] == caption and len(captions) > 1:
@@ -218,9 +218,9 @@ def format_table(report: dict[str, Any]) -> str:
     for kind in ("standing", "test_contexts"):
         if kind not in report:
             continue
-        lines += ["", kind, f"{'caption':<28}" + "".join(f"{c:>16}" for c in cols)]
+        lines += ["", kind, f"{'caption':<28}" + "".join(f"{c:>18}" for c in cols)]
         for caption, row in report[kind].items():
-            lines.append(f"{caption:<28}" + "".join(f"{row[c]:>16.4f}" for c in cols))
+            lines.append(f"{caption:<28}" + "".join(f"{row[c]:>18.4f}" for c in cols))
     if "captioned_windows" in report:
         cw = report["captioned_windows"]
         lines += ["", f"captioned test windows: {cw['windows']} ({cw['distinct_captions']} captions), l2p m"]

@@ -357,16 +357,22 @@ def run_inbetween_bench(cfg: InbetweenConfig) -> dict[str, Any]:
 
     kin = G1Kinematics(ensure_assets(cfg.assets_dir, quiet=True).g1_mjcf)
     report = run_on_clips(clips, cfg, kin)
-    return {"benchmark": "inbetween", "data": str(cfg.data), "split": cfg.split, "clips": len(clips), "temperature": cfg.temperature, **report}
+    return {
+        "benchmark": "inbetween",
+        "data": str(cfg.data),
+        "split": cfg.split,
+        "clips": len(clips),
+        "temperature": cfg.temperature,
+        **report,
+    }
 
 
 def format_table(report: dict[str, Any]) -> str:
     """The report's results as a readable table: one block per length, one row per method."""
     width = 12
     header = f"{'method':<10}" + "".join(f"{label:>{width}}" for _, label in TABLE_COLUMNS)
-    lines = [
-        f"in-betweening benchmark: {report.get('data', '')}, {report.get('split', 'test')} split (seed {report['seed']}, {report['fps']:g} fps)"
-    ]
+    source = f"{report.get('data', '')}, {report.get('split', 'test')} split"
+    lines = [f"in-betweening benchmark: {source} (seed {report['seed']}, {report['fps']:g} fps)"]
     for length in report["lengths"]:
         key = str(length)
         lines += ["", f"transition {length} frames, {report['windows'][key]} windows", header]

@@ -24,19 +24,85 @@ _SIDE = r"(left|right)"
 # Patterns are tried in order on what is left of the caption, longest phrases first.
 _RULES: tuple[tuple[str, tuple[str, ...]], ...] = (
     # standing
-    (r"stop and stand still", ("stop and stand still", "stop and stay still", "come to a stop and stand still", "halt and stand still", "stop walking and stand still", "stop and stand")),  # noqa: E501
+    (
+        r"stop and stand still",
+        (
+            "stop and stand still",
+            "stop and stay still",
+            "come to a stop and stand still",
+            "halt and stand still",
+            "stop walking and stand still",
+            "stop and stand",
+        ),
+    ),
     (r"stand still", ("stand still", "stay still", "stand in place", "hold still", "stay where you are", "keep standing")),
     # speed changes
-    (r"speed up while walking forward", ("speed up while walking forward", "walk forward faster", "pick up the pace walking forward", "accelerate while walking forward", "go forward faster")),  # noqa: E501
-    (r"slow down while walking forward", ("slow down while walking forward", "walk forward more slowly", "ease off the pace walking forward", "decelerate while walking forward", "go forward slower")),  # noqa: E501
+    (
+        r"speed up while walking forward",
+        (
+            "speed up while walking forward",
+            "walk forward faster",
+            "pick up the pace walking forward",
+            "accelerate while walking forward",
+            "go forward faster",
+        ),
+    ),
+    (
+        r"slow down while walking forward",
+        (
+            "slow down while walking forward",
+            "walk forward more slowly",
+            "ease off the pace walking forward",
+            "decelerate while walking forward",
+            "go forward slower",
+        ),
+    ),
     # locomotion
-    (r"start walking (forward|backward)", ("start walking {0}", "begin walking {0}", "start moving {0}", "set off {0}", "begin to walk {0}", "start to go {0}")),  # noqa: E501
-    (r"walk (forward|backward) and to the " + _SIDE, ("walk {0} and to the {1}", "go {0} and to the {1}", "move diagonally {0} and to the {1}", "walk diagonally {0} to the {1}", "head {0} and to the {1}")),  # noqa: E501
-    (r"walk forward", ("walk forward", "go forward", "move forward", "head forward", "stroll forward", "walk ahead", "go straight ahead", "step forward")),  # noqa: E501
-    (r"walk backward", ("walk backward", "go backward", "move backward", "walk backwards", "back up", "step backward", "head backward")),  # noqa: E501
-    (r"step sideways to the " + _SIDE, ("step sideways to the {0}", "sidestep to the {0}", "move sideways to the {0}", "shuffle to the {0}", "step to the {0}", "walk sideways to the {0}")),  # noqa: E501
-    (r"turn " + _SIDE + r" in place", ("turn {0} in place", "turn {0} on the spot", "rotate {0} in place", "turn to the {0} without walking", "spin {0} on the spot", "turn to your {0} in place")),  # noqa: E501
-    (r" while turning " + _SIDE, (" while turning {0}", " while veering {0}", " and turn {0}", ", curving to the {0}", " while bearing {0}", " turning {0}")),  # noqa: E501
+    (
+        r"start walking (forward|backward)",
+        ("start walking {0}", "begin walking {0}", "start moving {0}", "set off {0}", "begin to walk {0}", "start to go {0}"),
+    ),
+    (
+        r"walk (forward|backward) and to the " + _SIDE,
+        (
+            "walk {0} and to the {1}",
+            "go {0} and to the {1}",
+            "move diagonally {0} and to the {1}",
+            "walk diagonally {0} to the {1}",
+            "head {0} and to the {1}",
+        ),
+    ),
+    (
+        r"walk forward",
+        ("walk forward", "go forward", "move forward", "head forward", "stroll forward", "walk ahead", "go straight ahead", "step forward"),
+    ),
+    (r"walk backward", ("walk backward", "go backward", "move backward", "walk backwards", "back up", "step backward", "head backward")),
+    (
+        r"step sideways to the " + _SIDE,
+        (
+            "step sideways to the {0}",
+            "sidestep to the {0}",
+            "move sideways to the {0}",
+            "shuffle to the {0}",
+            "step to the {0}",
+            "walk sideways to the {0}",
+        ),
+    ),
+    (
+        r"turn " + _SIDE + r" in place",
+        (
+            "turn {0} in place",
+            "turn {0} on the spot",
+            "rotate {0} in place",
+            "turn to the {0} without walking",
+            "spin {0} on the spot",
+            "turn to your {0} in place",
+        ),
+    ),
+    (
+        r" while turning " + _SIDE,
+        (" while turning {0}", " while veering {0}", " and turn {0}", ", curving to the {0}", " while bearing {0}", " turning {0}"),
+    ),
     # speed words
     (r" slowly", (" slowly", " at a slow pace", " gently", " leisurely", " unhurriedly")),
     (r" quickly", (" quickly", " fast", " briskly", " at a quick pace", " rapidly")),
@@ -47,20 +113,43 @@ _RULES: tuple[tuple[str, tuple[str, ...]], ...] = (
 # Gesture phrases, bare (the caption's connector " while ", " and " or " " is chosen anew): a phrase
 # that starts with "with" follows the motion directly, any other one after "while" or "and".
 _GESTURES: tuple[tuple[str, tuple[str, ...]], ...] = (
-    (r"waving the " + _SIDE + r" hand", ("waving the {0} hand", "waving with the {0} hand", "waving your {0} hand", "with a wave of the {0} hand")),  # noqa: E501
+    (
+        r"waving the " + _SIDE + r" hand",
+        ("waving the {0} hand", "waving with the {0} hand", "waving your {0} hand", "with a wave of the {0} hand"),
+    ),
     (r"waving both hands", ("waving both hands", "waving with both hands", "waving both arms", "with both hands waving")),
-    (r"with the " + _SIDE + r" arm raised", ("with the {0} arm raised", "with the {0} arm up", "holding the {0} arm up", "raising the {0} arm", "with your {0} arm lifted")),  # noqa: E501
-    (r"with both arms raised", ("with both arms raised", "with both arms up", "with arms up", "holding both arms up", "with your arms lifted")),  # noqa: E501
-    (r"reaching forward with the " + _SIDE + r" hand", ("reaching forward with the {0} hand", "reaching out with the {0} hand", "stretching the {0} hand forward", "reaching ahead with your {0} hand")),  # noqa: E501
-    (r"pointing to the front " + _SIDE, ("pointing to the front {0}", "pointing ahead to the {0}", "pointing forward and to the {0}", "pointing front {0}")),  # noqa: E501
+    (
+        r"with the " + _SIDE + r" arm raised",
+        ("with the {0} arm raised", "with the {0} arm up", "holding the {0} arm up", "raising the {0} arm", "with your {0} arm lifted"),
+    ),
+    (
+        r"with both arms raised",
+        ("with both arms raised", "with both arms up", "with arms up", "holding both arms up", "with your arms lifted"),
+    ),
+    (
+        r"reaching forward with the " + _SIDE + r" hand",
+        (
+            "reaching forward with the {0} hand",
+            "reaching out with the {0} hand",
+            "stretching the {0} hand forward",
+            "reaching ahead with your {0} hand",
+        ),
+    ),
+    (
+        r"pointing to the front " + _SIDE,
+        ("pointing to the front {0}", "pointing ahead to the {0}", "pointing forward and to the {0}", "pointing front {0}"),
+    ),
     (r"with arms crossed", ("with arms crossed", "with the arms folded", "with crossed arms", "folding the arms")),
-    (r"with hands on hips", ("with hands on hips", "with hands on the hips", "with your hands resting on your hips", "keeping the hands on the hips")),  # noqa: E501
+    (
+        r"with hands on hips",
+        ("with hands on hips", "with hands on the hips", "with your hands resting on your hips", "keeping the hands on the hips"),
+    ),
 )
 _COMPILED = tuple((re.compile(pattern), alternatives) for pattern, alternatives in _RULES)
 _GESTURE_AT_END = tuple(
     (re.compile(r"^(?P<main>.+?)(?: while| and)? (?P<gesture>" + pattern + r")$"), alternatives) for pattern, alternatives in _GESTURES
 )
-_WRAPPERS = ("{}", "{}", "{}", "please {}", "could you {}", "can you {}", "{} please", "now {}", "i want you to {}", "go ahead and {}")  # noqa: E501
+_WRAPPERS = ("{}", "{}", "{}", "please {}", "could you {}", "can you {}", "{} please", "now {}", "i want you to {}", "let us {}")
 
 
 def paraphrase(caption: str, rng: np.random.Generator) -> str:
