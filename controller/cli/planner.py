@@ -33,6 +33,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     planner.add_argument("--no-mirror", action="store_true", help="do not add left-right mirrored copies of imported clips")
     planner.add_argument("--text-dropout", type=float, default=None, help="share of windows without text (1: no text at all)")
     planner.add_argument("--text-variants", type=int, default=None, help="paraphrases per caption, the caption included")
+    planner.add_argument("--free-share", type=float, default=None, help="share of windows with no constraint at all (default 0.1)")
     planner.add_argument("--no-progress", action="store_true")
 
     viz = sub.add_parser("viz", help="pictures and videos of plans")
@@ -66,6 +67,8 @@ def run_train(args: argparse.Namespace) -> int:
         cfg = replace(cfg, text_dropout=args.text_dropout)
     if args.text_variants is not None:
         cfg = replace(cfg, text_variants=args.text_variants)
+    if args.free_share is not None:
+        cfg = replace(cfg, free_share=args.free_share)
     if args.steps is not None:
         if args.steps < 1:
             raise ConfigError(f"--steps must be at least 1, got {args.steps}")

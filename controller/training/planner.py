@@ -49,7 +49,7 @@ ONNX_FILE = "planner.onnx"
 SPEC_FILE = "planner.json"
 TEXT_TABLE = "text_table.npz"
 MODEL_KEYS = (  # a resumed run may change the rest (steps, threads, sampling)
-    "batch", "lr", "width", "depth", "latent", "pca_windows", "seed", "data_weights", "mirror_imports", "text_dropout", "text_variants",
+    "batch", "lr", "width", "depth", "latent", "pca_windows", "seed", "data_weights", "mirror_imports", "text_dropout", "text_variants", "free_share",
 )  # fmt: skip
 Embed = Callable[[list[str]], np.ndarray]  # strings -> unit sentence embeddings [N, 384]
 
@@ -63,7 +63,7 @@ class TrainConfig:
     depth: int = 3
     latent: int = 128
     sampling_steps: int = 4
-    temperature: float = 0.35  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
+    temperature: float = 0.2  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
     pca_windows: int = 20000
     seed: int = 0
     threads: int = 2
@@ -72,6 +72,7 @@ class TrainConfig:
     mirror_imports: bool = True  # also train on imported (motion capture) clips mirrored left-right
     text_dropout: float = 0.3  # share of windows trained without text; 1 trains no text at all
     text_variants: int = 12  # paraphrases per caption (the caption itself included)
+    free_share: float = 0.1  # share of windows with no constraint at all (plans from the context and text alone)
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.text_dropout <= 1.0:
@@ -190,8 +191,8 @@ def train_planner(
         captions = {text for group in train_clips + val_clips for clip in group for _, text in clip.captions}
         table = _text_table(out_dir / TEXT_TABLE, captions, cfg, embed)
     weights = cfg.data_weights or None
-    train = WindowSampler(train_clips, group_weights=weights, text=table)
-    val = WindowSampler(val_clips, group_weights=weights, text=table)
+    train = WindowSampler(train_clips, group_weights=weights, text=table, free_share=cfg.free_share)
+    val = WindowSampler(val_clips, group_weights=weights, text=table, free_share=cfg.free_share)
     checkpoint_path = out_dir / CHECKPOINT
     started = time.monotonic()
     if checkpoint_path.is_file():

@@ -60,11 +60,13 @@ class WindowSampler:
         min_frames: int = CONTEXT_FRAMES + ALLOWED_LENGTHS[0],
         group_weights: Sequence[float] | None = None,
         text: TextTable | None = None,
+        free_share: float = 0.1,  # windows with no constraint at all: the context (and the text) alone decide the motion
     ) -> None:
         if group_weights is not None and (len(group_weights) != len(groups) or min(group_weights, default=0.0) <= 0):
             raise ValueError(f"group_weights must be {len(groups)} positive numbers, one per group, got {list(group_weights)}")
         self.clips: list[TrainClip] = []
         self.text = text
+        self.free_share = free_share
         weights: list[FloatArray] = []
         shares: list[float] = []
         for g, group in enumerate(groups):
@@ -103,7 +105,7 @@ class WindowSampler:
         origin_xy, origin_yaw = ft.frame_origin(qpos[:, CONTEXT_FRAMES - 1])
         channels = ft.to_channels(qpos, origin_xy, origin_yaw)
         context, truth = channels[:, :CONTEXT_FRAMES], channels[:, CONTEXT_FRAMES:]
-        mask = random_constraints(rng, length)
+        mask = random_constraints(rng, length, self.free_share)
         curve, window = ft.anchor_curve(context, truth, mask)
         if self.text is None:
             text, has_text = np.zeros((batch, TEXT_EMBEDDING_DIM)), np.zeros(batch, dtype=bool)
@@ -114,10 +116,7 @@ class WindowSampler:
         return WindowBatch(cond, target, curve, window, truth, length, tuple(captions), has_text)
 
 
-FREE_SHARE = 0.1  # windows with no constraint at all: the context (and the text) alone decide the motion
-
-
-def random_constraints(rng: np.random.Generator, length: NDArray[np.int64], free_share: float = FREE_SHARE) -> NDArray[np.bool_]:
+def random_constraints(rng: np.random.Generator, length: NDArray[np.int64], free_share: float = 0.1) -> NDArray[np.bool_]:
     """[B, F, C] masks: a main keyframe near the end, sometimes earlier partial keyframes; none in `free_share` of them."""
     mask = np.zeros((len(length), enc.FRAMES, ft.NUM_CHANNELS), dtype=bool)
     free = rng.random(len(length)) < free_share
