@@ -1,7 +1,7 @@
 """`g1ctl train planner` and `g1ctl viz plan`.
 
 g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N] [--data-weights 1,1,2]
-                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12]
+                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12] [--free-share 0.1]
 g1ctl viz plan --out plan.png [--model DIR] [--data DATASET] [--seeds 4] [--length 44]
 g1ctl viz plan --out plan.mp4 --target 1.2,0.4,0.8
 """
