@@ -99,7 +99,7 @@ PROTOTYPES: dict[str, tuple[str, ...]] = {
     "turn": (
         "turn left", "turn right", "turn around", "rotate", "spin around", "pivot", "rotate in place",
         "face the other way", "do a quarter turn", "turn to your left", "spin", "twirl around", "make a u-turn",
-        "turn", "change direction",
+        "turn", "change direction", "do a full circle", "make a full turn",
     ),
     "wave": (
         "wave", "wave your hand", "wave hello", "wave goodbye", "greet us with your hand", "say hi with your hand",
@@ -199,6 +199,11 @@ _RETURN_RE = re.compile(
     r"\b(?:starting|original|initial) (?:point|position|spot|place|pose)\b|\bgo home\b"
 )
 _REPEAT_RE = re.compile(r"^(?:do (?:it|that|this|the same(?: thing)?)|repeat(?: it| that| this)?)(?: again)?\b|^again\b")
+_GESTURE_RE = re.compile(r"\b(?:wave|waving|raise|raising|lift|lifting|point|pointing|reach|reaching|hands?|arms?)\b")
+# A prompt that corrects itself is not guessed at.
+_SELF_CORRECTION_RE = re.compile(
+    r"\bno wait\b|\bnever ?mind\b|\bscratch that\b|\bi mean\b|\bactually no\b|\bcancel that\b|\bforget (?:it|that)\b"
+)
 _THERE_AND_BACK_RE = re.compile(r"\band (?:come |walk |go |head )?back(?: again)?\b")
 
 # First-word verbs that decide the behaviour when the rest of the part is plain.
@@ -305,6 +310,9 @@ def classify_action(part: str, encoder: TextEncoder) -> ActionMatch:
 
 
 def _keyword_behaviour(part: str, words: list[str]) -> str | None:
+    q = read_quantities(part)
+    if q.turn_deg is not None and q.distance_m is None and q.duration_s is None and q.shape is None and not _GESTURE_RE.search(part):
+        return "turn"  # "do a full circle", "a quarter turn to the left", "make a u-turn"
     if re.search(r"\bhands? on (?:your |the )?hips?\b|\bakimbo\b", part):
         return "hands_on_hips"
     if re.search(r"\b(?:cross|fold)\w* (?:your |both |the )?arms\b|\barms (?:crossed|folded)\b", part):
@@ -606,6 +614,11 @@ def resolve(prompt: str, encoder: TextEncoder) -> tuple[Clause, ...]:
         raise PromptRefused(f"cannot plan an empty prompt; {CAPABILITIES}")
     if len(stripped) > MAX_PROMPT_CHARS:
         raise PromptRefused(f"cannot plan a prompt of {len(stripped)} characters (at most {MAX_PROMPT_CHARS}); {CAPABILITIES}")
+    correction = _SELF_CORRECTION_RE.search(stripped.lower())
+    if correction:
+        raise PromptRefused(
+            f'cannot plan "{stripped}": it corrects itself ("{correction[0]}"); type the request as it should run; {CAPABILITIES}'
+        )
     texts = split_clauses(stripped)
     if not texts:
         raise PromptRefused(f'cannot plan "{stripped}": it names no action; {CAPABILITIES}')
