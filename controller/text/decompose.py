@@ -51,7 +51,7 @@ _FILLER_RE = re.compile(r"\b(?:" + "|".join(_FILLER) + r")\b")
 # Words that open a clause without meaning anything there.
 _LEADING_RE = re.compile(
     r"^(?:(?:(?:and|then|also|so|ok|okay|alright|all right|well|um|uh|oh|first(?: of all)?|to (?:start|begin)(?: with)?|"
-    r"at first|second(?:ly)?|third(?:ly)?|last(?:ly)?|finally|next|after|you)\b|,)\s*)+"
+    r"at first|second(?:ly)?|third(?:ly)?|last(?:ly)?|finally|next|after (?:that|this)|afterwards?|after|you)\b|,)\s*)+"
 )
 _SPLIT_RE = re.compile(
     r"(\s*[.!?;]+(?:\s+|$)|\s*,\s*|\s+and then\s+|\s+and after that\s+|\s+then\s+|\s+after that\s+|\s+after this\s+|"
