@@ -17,7 +17,9 @@ left (right if said); "in a square": 1 m sides (or the stated distance), turning
 "come back"/"return to the start": to the position where the program started, turning to
 face it first unless it is within 20 degrees ahead, or walking backward when it is behind
 and at most 1.5 m away (arrival heading: the direction of travel). A bare "go back"
-returns to the start too; "go back 1 m" walks backward. A gesture alone lasts 3 s
+returns to the start too (backward 1 m when it is already there); "go back 1 m" walks backward.
+"lower your arms"/"hands down" is a 1 s stand with the arms at rest; "hold it for N s"
+after a gesture keeps that gesture N s (3 s if no time). A gesture alone lasts 3 s
 (a wave counted N times: N waves at 1.5 Hz plus a 0.5 s blend); "wait" with no time 2 s.
 Limits: a clause walks at most 10 m, turns at most 720 degrees, lasts at most 60 s; at most
 10 repetitions and 12 clauses; a prompt at most 400 characters.
@@ -68,6 +70,7 @@ GESTURE_S = 3.0
 WAVE_HZ = 1.5
 BLEND_S = 0.5
 DEFAULT_WAIT_S = 2.0
+LOWER_ARMS_S = 1.0  # "lower your arms": a short stand, arms at rest
 MAX_CLAUSE_WALK_M = 10.0
 MAX_TURN_DEG = 720.0
 MAX_DURATION_S = 60.0
@@ -180,8 +183,8 @@ _UNSUPPORTED_KEYWORDS: tuple[tuple[str, str], ...] = (
     (r"\bkick\w*", "kick"),
     (r"\bclimb\w*|\bstairs?\b|\bstaircase\b|\bupstairs\b|\bdownstairs\b|\bladder\b", "climb"),
     (r"\bdanc\w*|\bmoonwalk\w*|\bboogie\b|\btwerk\w*", "dance"),
-    (r"\bpick (?:\w+ )?up\b|\bgrab\w*|\bcarry\w*|\bfetch\w*|\bbring\b|\bthrow\w*|\bcatch\w*|\bhand me\b|\bgive me\b|"
-     r"\b(?:lift|hold) (?:the|a|an|this|that|it)\b", "manipulate"),
+    (r"\bpick (?:\w+ )?up\b|\bgrab\w*|\bcarry\w*|\bfetch\w*|\bbring\b|\bthrow\w*|\bcatch\w*|\bhand me\b|\bgive me\b(?! a wave)|"
+     r"\b(?:lift|hold) (?:the|a|an)\b", "manipulate"),
     (r"\bdoors?\b|\bdrawers?\b|\bopen\b", "door"),
     (r"\bfly\b|\bflying\b", "fly"),
     (r"\bswim\w*", "swim"),
@@ -204,6 +207,14 @@ _GESTURE_RE = re.compile(r"\b(?:wave|waving|raise|raising|lift|lifting|point|poi
 _SELF_CORRECTION_RE = re.compile(
     r"\bno wait\b|\bnever ?mind\b|\bscratch that\b|\bi mean\b|\bactually no\b|\bcancel that\b|\bforget (?:it|that)\b"
 )
+_LOWER_ARMS_RE = re.compile(
+    r"\b(?:lower|drop|relax|rest) (?:your |both |the )?(?:left |right )?(?:arms?|hands?)\b|\b(?:arms?|hands?) down\b|"
+    r"\bput (?:your |both |the )?(?:arms?|hands?) down\b"
+)
+# "hold it for 3 seconds" after a gesture: the same gesture, longer.
+_HOLD_RE = re.compile(r"^(?:hold|keep) (?:it|them|that|this|that pose|the pose|your (?:arms?|hands?)|them up|it up)\b")
+# A bare "go back"/"walk back" (no amount): back to the start.
+_BARE_BACK_RE = re.compile(r"^(?:go|walk|head|move|come|get|step) back(?: again)?$")
 _THERE_AND_BACK_RE = re.compile(r"\band (?:come |walk |go |head )?back(?: again)?\b")
 
 # First-word verbs that decide the behaviour when the rest of the part is plain.
@@ -296,6 +307,8 @@ def classify_action(part: str, encoder: TextEncoder) -> ActionMatch:
             return ActionMatch(name, 1.0, pattern, "keyword")
     if _RETURN_RE.search(part):
         return ActionMatch("return", 1.0, "return", "keyword")
+    if _LOWER_ARMS_RE.search(part):
+        return ActionMatch("wait", 1.0, "lower arms", "keyword")  # arms back to rest: a short stand
     words = re.findall(r"[a-z']+", part)
     keyword = _keyword_behaviour(part, words)
     if keyword is not None and all(w in _PLAIN_WORDS or w in _VERBS for w in words):
@@ -528,6 +541,19 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
         if previous is None:
             raise _refuse(text, "there is nothing before it to repeat")
         return _repeat_clause(text, previous, _repetitions(text, read_quantities(text)))
+    if _HOLD_RE.search(text) and previous is not None and previous.gestures:
+        q = read_quantities(text)
+        _check_duration(text, q.duration_s, q.negative)
+        seconds = q.duration_s if q.duration_s is not None else GESTURE_S
+        return Clause(text, None, previous.gestures, seconds, None, {"gestures": " ".join(previous.gestures), "duration_s": seconds})
+    if _BARE_BACK_RE.search(text) and math.hypot(pose[0], pose[1]) > 0.05:
+        points = _return(pose)  # "go back" after moving away: to the start (a distance makes it a backward walk)
+        distance = round(math.hypot(points[-1].forward_m, points[-1].left_m), 3)
+        return Clause(
+            text,
+            Motion(tuple(points), SPEEDS[None], YAW_RATES[None]),
+            quantities={"behaviour": "return", "distance_m": distance, "speed_mps": SPEEDS[None]},
+        )
     parts = split_parts(text)
     matches = [(part, classify_action(part, encoder)) for part in parts]
     for part, match in matches:
@@ -562,7 +588,8 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
             quantities.update(turn_deg=degrees * times, direction="left" if degrees > 0 else "right")
             motion = Motion(tuple(points), SPEEDS[q.speed], YAW_RATES[q.speed])
         elif match.behaviour == "wait":
-            min_duration = (q.duration_s if q.duration_s is not None else DEFAULT_WAIT_S) * times
+            default_s = LOWER_ARMS_S if _LOWER_ARMS_RE.search(part) else DEFAULT_WAIT_S
+            min_duration = (q.duration_s if q.duration_s is not None else default_s) * times
             _check_duration(part, min_duration, q.negative)
             quantities["duration_s"] = min_duration
         elif match.behaviour == "return":

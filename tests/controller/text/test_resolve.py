@@ -229,6 +229,27 @@ def test_paraphrased_prompts_plan(encoder: SentenceEncoder, prompt: str, behavio
     assert clause.quantities["behaviour"] == behaviour
 
 
+def test_bare_go_back_returns_to_the_start(encoder: SentenceEncoder) -> None:
+    p = _program("walk forward 2 meters, turn left, walk forward one meter, then go back", encoder)
+    assert p.clauses[-1].quantities["behaviour"] == "return"
+    assert math.hypot(*end_pose(p.clauses)[:2]) < 1e-9
+    (alone,) = _program("go back", encoder).clauses  # nothing to return from: a backward walk
+    assert alone.displacement == (-1.0, 0.0, 0.0)
+    (measured,) = _program("go back two meters", encoder).clauses
+    assert measured.displacement == (-2.0, 0.0, 0.0)
+
+
+def test_hold_it_keeps_the_gesture_and_lowering_the_arms_is_a_short_stand(encoder: SentenceEncoder) -> None:
+    raise_, hold, lower = _program("raise your right hand, hold it for 4 seconds, then lower your arms", encoder).clauses
+    assert raise_.gestures == hold.gestures == ("raise_right",) and hold.min_duration_s == 4.0
+    assert lower.gestures == () and lower.motion is None and lower.min_duration_s == 1.0
+
+
+def test_do_it_again_repeats_the_previous_clause(encoder: SentenceEncoder) -> None:
+    p = _program("turn left 45 degrees, then do it again twice", encoder)
+    assert end_pose(p.clauses) == pytest.approx((0.0, 0.0, 135.0))
+
+
 # --- refusals ---
 
 
