@@ -45,8 +45,10 @@ _FILLER = [
     r"if you can", r"if you could", r"if possible", r"if you don't mind", r"please", r"pls", r"kindly",
     r"thank you(?: very much)?", r"thanks", r"for me", r"right now", r"right away", r"now", r"just",
     r"let's", r"let us", r"try to", r"try and", r"make sure (?:to|you)", r"be sure to", r"how about you",
-    r"hey robot", r"hey", r"hi robot", r"hello robot", r"robot", r"buddy", r"g1",
+    r"hey robot", r"hey", r"hi robot", r"hello robot",
 ]  # fmt: skip
+# The robot addressed by name: at the start, or set off by commas ("robot, walk", "walk, robot, then").
+_ADDRESS_RE = re.compile(r"^\s*(?:ok |okay |hey |hi |hello )?(?:robot|buddy|g1)\b\s*,?|,\s*(?:robot|buddy|g1)\s*(?=,|[.!?]|$)")
 _FILLER_RE = re.compile(r"\b(?:" + "|".join(_FILLER) + r")\b")
 # Words that open a clause without meaning anything there.
 _LEADING_RE = re.compile(
@@ -82,7 +84,7 @@ _MODIFIER_WORDS = (
     | FAST_WORDS
     | _words(
         "a an the to your my of for by in on at about around roughly approximately exactly more again each way "
-        "total altogether all over bit little tad touch slightly pace speed another same distance"
+        "total altogether all over bit little tad touch slightly pace speed another same distance per"
     )
 )
 _GERUND_EXCEPTIONS = _words(
@@ -115,6 +117,7 @@ def normalize(prompt: str) -> str:
     text = words_to_digits(text)
     text = re.sub(r"\bx (\d+)\b", r"\1 times", text)
     text = re.sub(r"\b(\d+) x\b", r"\1 times", text)
+    text = _ADDRESS_RE.sub(" ", text)
     text = _FILLER_RE.sub(" ", text)
     text = re.sub(r"\s+([,.!?;])", r"\1", text)
     text = re.sub(r"([,;])\1+", r"\1", text)
@@ -254,6 +257,7 @@ class Quantities:
     negative: bool = False
     bare_number: float | None = None
     shape: str | None = None
+    speed_mps: float | None = None
 
     def as_dict(self) -> dict[str, float | str]:
         """The stated values, for a clause's `quantities` (empty fields left out)."""
@@ -277,6 +281,7 @@ class Quantities:
 _DISTANCE_RE = re.compile(
     _NUM + r"\s*(m|meters?|metres?|cm|centimet(?:er|re)s?|ft|feet|foot|yards?|yd|steps?|paces?|strides?)\b(?!\s*(?:per|/))"
 )
+_SPEED_RE = re.compile(_NUM + r"\s*(?:m|meters?|metres?)\s*(?:per second|per sec|/\s*s|a second)\b")
 _DURATION_RE = re.compile(_NUM + r"\s*(seconds?|secs?|s|minutes?|mins?)\b")
 _DEGREES_RE = re.compile(_NUM + r"\s*(degrees?|degs?)\b")
 _TURNS_RE = re.compile(_NUM + r"\s*(?:full\s+|complete\s+|whole\s+)?(?:turns?|rotations?|revolutions?|spins?|circles?)\b")
@@ -328,6 +333,11 @@ def read_quantities(text: str) -> Quantities:
     def take(m: re.Match[str]) -> None:
         used.append(m.span())
 
+    speed = _SPEED_RE.search(text)
+    if speed:
+        values["speed_mps"] = float(speed[1])
+        take(speed)
+        text = text[: speed.start()] + " " * (speed.end() - speed.start()) + text[speed.end() :]  # not also a distance or a time
     reps = list(_REPS_RE.finditer(text))
     if reps:
         values["repetitions"] = float(reps[0][1])
@@ -408,7 +418,8 @@ def read_quantities(text: str) -> Quantities:
 
 def action_phrase(text: str) -> str:
     """The words of `text` that name the action (numbers, units, times and fillers removed): what the encoder reads."""
-    phrase = _REPS_RE.sub(" ", text)
+    phrase = _SPEED_RE.sub(" ", text)
+    phrase = _REPS_RE.sub(" ", phrase)
     phrase = _DURATION_RE.sub(" ", phrase)
     phrase = _DEGREES_RE.sub(" ", phrase)
     phrase = _DISTANCE_RE.sub(" ", phrase)

@@ -141,7 +141,10 @@ PROTOTYPES: dict[str, tuple[str, ...]] = {
     "exercise": ("do push ups", "do squats", "kneel down", "bow", "do sit ups", "crouch"),
     "perception": ("follow me", "come here", "come to me", "go to the kitchen", "find the door", "look at me", "walk to the table"),
     "speech": ("say something", "talk to me", "sing a song", "tell me a joke", "speak"),
-    "other_gesture": ("clap your hands", "salute", "give a thumbs up", "shake hands", "high five", "nod your head", "shrug", "hug me"),
+    "other_gesture": (
+        "clap your hands", "salute", "give a thumbs up", "shake hands", "high five", "nod your head", "shrug", "hug me",
+        "make a circle with your arms", "flap your arms", "draw a shape in the air",
+    ),
     "balance": ("stand on one leg", "balance on one foot"),
     "task": (
         "cook dinner", "clean the room", "tie your shoes", "play the piano", "do yoga", "juggle", "take a photo", "drive a car",
@@ -169,6 +172,10 @@ REASONS: dict[str, str] = {
     "other_gesture": "its only gestures are waving, raising, pointing, reaching, crossed arms and hands on hips",
     "balance": "standing on one leg is beyond this robot's planner",
     "task": "it only moves its body: walking, turning and arm gestures",
+    "until": "it cannot sense when to stop; give a distance or a time",
+    "head": 'its head does not move on its own; turn the whole body instead ("turn left")',
+    "style": "it walks, turns and gestures one way only: gaits and styles are not planned",
+    "in_place": "stepping in place is not planned (it can stand still)",
     "unknown": "not an action this planner knows",
 }
 
@@ -189,6 +196,17 @@ _UNSUPPORTED_KEYWORDS: tuple[tuple[str, str], ...] = (
     (r"\bfly\b|\bflying\b", "fly"),
     (r"\bswim\w*", "swim"),
     (r"\bpush ?ups?\b|\bsit ?ups?\b|\bsquat\w*|\bkneel\w*|\bcrouch\w*|\bbow\b|\blunges?\b", "exercise"),
+    (r"\buntil\b|\btill\b", "until"),
+    (r"\b(?:turn|move|tilt|shake|nod|rotate) (?:your |the )?head\b|\bhead (?:left|right|up|down)\b|"
+     r"\blook (?:left|right|up|down|around)\b", "head"),
+    (r"\blike an? \w+|\bin the style of\b|\bon (?:your |its |my )?(?:hands|knees|toes|tiptoes?|all fours)\b|\bon tiptoe\b|"
+     r"\bzigzag\w*", "style"),
+    (r"^(?:walk|step|march|move|stomp)\w* (?:in place|on the spot)\b", "in_place"),
+    (r"\bshake (?:your |the )?(?:hips|body|booty|butt)\b|\bwiggle\w*", "dance"),
+    (r"^(?!wav|greet|say|point|hello|hi\b)\w+.*\b(?:to|towards?|into|around|over to|up to|through|across) "
+     r"(?:the|a|an|that|this|my|our|his|her|their) "
+     r"(?!left\b|right\b|front\b|side\b|start\w*\b|beginning\b|origin\b|back\b|other\b|opposite\b|same\b|original\b|initial\b)\w+",
+     "perception"),
     (r"\bfollow\b|\bcome here\b|\bcome to me\b|\btowards? (?:me|us|him|her|them)\b|\blook (?:at|for)\b|\bfind\b|\bsearch\b",
      "perception"),
     (r"\b(?:sing|talk|speak|tell|shout|laugh|smile)\b|\bsay (?!hi\b|hello\b|hey\b|bye\b|goodbye\b)", "speech"),
@@ -198,6 +216,7 @@ _UNSUPPORTED_KEYWORDS: tuple[tuple[str, str], ...] = (
 )  # fmt: skip
 
 _RETURN_RE = re.compile(
+    r"\b(?:go|walk|head|get|move|come)\w* to (?:the )?(?:start\w*|beginning|origin)\b|"
     r"\bcome back\b|\breturn\w*|\bback to (?:the )?(?:start\w*|beginning|origin|where)|\bwhere you (?:started|began|were|came from)\b|"
     r"\b(?:starting|original|initial) (?:point|position|spot|place|pose)\b|\bgo home\b"
 )
@@ -413,8 +432,17 @@ def _check_duration(part: str, seconds: float | None, negative: bool) -> None:
         raise _refuse(part, f"{seconds:g} s is longer than the {MAX_DURATION_S:g} s one clause may last")
 
 
+def _speed(part: str, q: Quantities) -> float:
+    """The walking speed asked for (m/s): a stated number, else slow/normal/fast."""
+    if q.speed_mps is None:
+        return SPEEDS[q.speed]
+    if not 0.1 <= q.speed_mps <= SPEEDS["fast"]:
+        raise _refuse(part, f"{q.speed_mps:g} m/s is outside the walking speeds it plans (0.1 to {SPEEDS['fast']:g} m/s)")
+    return q.speed_mps
+
+
 def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | str]]:
-    speed = SPEEDS[q.speed]
+    speed = _speed(part, q)
     info: dict[str, float | str] = {}
     there_and_back = bool(_THERE_AND_BACK_RE.search(part)) and "backward" in q.directions and len(q.directions) > 1
     directions = [d for d in q.directions if not (there_and_back and d == "backward")]
@@ -436,11 +464,16 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
         return points, info
     vector = {"forward": (1.0, 0.0), "backward": (-1.0, 0.0), "left": (0.0, 1.0), "right": (0.0, -1.0)}
     if q.distances:
-        f = sum(vector.get(d, (0.0, 0.0))[0] * m for d, m in q.distances)
-        lt = sum(vector.get(d, (0.0, 0.0))[1] * m for d, m in q.distances)
-        distance = math.hypot(f, lt)
-        unit = (f / distance, lt / distance) if distance > 0 else (1.0, 0.0)
-        info["direction"] = " and ".join(d for d, _ in q.distances)
+        if any(d not in vector for d, _ in q.distances):
+            raise _refuse(part, "each distance needs a direction (forward, back, left or right)")
+        legs, f, lt = [], 0.0, 0.0
+        for d, m in q.distances:  # "2 m forward and 1 m back": one leg after the other
+            f, lt = f + vector[d][0] * m, lt + vector[d][1] * m
+            legs.append(Waypoint(f, lt, 0.0))
+        if q.negative or min(m for _, m in q.distances) <= 0:
+            raise _refuse(part, "distances, angles and times must be positive")
+        info.update(direction=" and ".join(d for d, _ in q.distances), distance_m=round(sum(m for _, m in q.distances), 3))
+        return legs, info
     else:
         if q.distance_m is not None:
             distance = q.distance_m
@@ -449,7 +482,7 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
             info["duration_s"] = q.duration_s
         elif q.vague:
             distance = VAGUE_WALK_M
-        elif q.bare_number is not None:
+        elif q.bare_number is not None and q.speed_mps is None:
             distance = q.bare_number
         elif re.match(r"(?:take (?:a|1) )?(?:step|pace|stride)\b|\bsidestep\b|\bstep\b", part) and not re.search(r"\bsteps\b", part):
             distance = STEP_M
@@ -470,6 +503,8 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
         info["direction"] = " ".join(names) or "forward"
     if distance <= 0 or q.negative:
         raise _refuse(part, "distances, angles and times must be positive")
+    if q.bare_number is not None and (q.distance_m is not None or q.duration_s is not None):
+        raise _refuse(part, f"the number {q.bare_number:g} has no unit (meters, steps, seconds)")
     points = [Waypoint(unit[0] * distance, unit[1] * distance, 0.0)]
     if there_and_back:
         points.append(Waypoint(0.0, 0.0, 0.0))
@@ -479,6 +514,8 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
 
 
 def _turn(part: str, q: Quantities) -> tuple[list[Waypoint], float]:
+    if q.turn_deg is not None and q.bare_number is not None:
+        raise _refuse(part, f"the number {q.bare_number:g} has no unit (degrees, turns)")
     if q.turn_deg is not None:
         degrees = q.turn_deg
     elif q.bare_number is not None:
@@ -579,7 +616,7 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
             points = _repeat(points, times)
             if _path_length(points) > MAX_CLAUSE_WALK_M + 1e-9:
                 raise _refuse(part, f"{_path_length(points):.3g} m is more than the {MAX_CLAUSE_WALK_M:g} m one clause may walk")
-            motion = Motion(tuple(points), SPEEDS[q.speed], YAW_RATES[q.speed])
+            motion = Motion(tuple(points), _speed(part, q), YAW_RATES[q.speed])
         elif match.behaviour == "turn":
             points, degrees = _turn(part, q)
             if abs(degrees) * times > MAX_TURN_DEG:
@@ -604,7 +641,7 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
         if q.speed:
             quantities["speed"] = q.speed
         if match.behaviour in ("walk", "return"):
-            quantities["speed_mps"] = SPEEDS[q.speed]
+            quantities["speed_mps"] = _speed(part, q)
     names: list[str] = []
     for part, match in gestures:
         q = read_quantities(part)

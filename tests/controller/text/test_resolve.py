@@ -245,6 +245,18 @@ def test_hold_it_keeps_the_gesture_and_lowering_the_arms_is_a_short_stand(encode
     assert lower.gestures == () and lower.motion is None and lower.min_duration_s == 1.0
 
 
+def test_legs_with_their_own_distances_and_a_stated_speed(encoder: SentenceEncoder) -> None:
+    (clause,) = _program("walk 2 m forward and 1 m backward at 0.4 meters per second", encoder).clauses
+    assert clause.motion is not None and clause.motion.speed_mps == 0.4
+    assert [w.forward_m for w in clause.motion.waypoints] == [2.0, 1.0]
+
+
+def test_robot_is_a_name_only_when_addressed(encoder: SentenceEncoder) -> None:
+    assert [c.text for c in _program("Robot, walk forward, then turn left", encoder).clauses] == ["walk forward", "turn left"]
+    with pytest.raises(PromptRefused, match='"do the robot"'):
+        _program("do the robot", encoder)
+
+
 def test_do_it_again_repeats_the_previous_clause(encoder: SentenceEncoder) -> None:
     p = _program("turn left 45 degrees, then do it again twice", encoder)
     assert end_pose(p.clauses) == pytest.approx((0.0, 0.0, 135.0))
@@ -281,6 +293,14 @@ def test_do_it_again_repeats_the_previous_clause(encoder: SentenceEncoder) -> No
         ("wave 100 times", "repetitions"),
         ("do it again", "nothing before it"),
         ("lift your left arm, no wait, the right one", "corrects itself"),
+        ("walk forward until you hit the wall", "when to stop"),
+        ("walk over to the window", "cannot see"),
+        ("walk like a zombie", "styles"),
+        ("march in place", "in place"),
+        ("turn your head left", "head"),
+        ("walk three meters forward then five more", "no unit"),
+        ("walk forward 1 meter at 3 meters per second", "3 m/s"),
+        ("make a circle with your arms", "only gestures"),
     ],
 )
 def test_refusals_name_the_part_in_one_line(encoder: SentenceEncoder, prompt: str, named: str) -> None:
