@@ -49,8 +49,17 @@ EPISODES_PER_RUN_SEED = 1000
 
 # Index 0 is "no gesture": the policy's own arm and waist targets.
 GESTURES: tuple[str, ...] = (
-    "none", "wave", "raise_left", "raise_right", "raise_both", "reach", "point", "arms_crossed", "hands_on_hips",
-    "wave_left", "wave_both",
+    "none",
+    "wave",
+    "raise_left",
+    "raise_right",
+    "raise_both",
+    "reach",
+    "point",
+    "arms_crossed",
+    "hands_on_hips",
+    "wave_left",
+    "wave_both",
 )  # fmt: skip  ("wave" is the right hand's; names are only ever appended, so older datasets still load)
 
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")

@@ -47,6 +47,9 @@ from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
 
 Pose = tuple[float, float, float]  # x, y (m, world), heading (rad, unwrapped)
+# Slowing down inside the follower's slow radius, then settling (at rest for 0.3 s): measured on
+# "walk forward half a meter and back, twice", four waypoints took 2-2.5 s each beyond path / speed.
+SETTLE_PER_WAYPOINT_S = 2.0
 
 
 def _clause_waypoints() -> WaypointConfig:
@@ -117,6 +120,7 @@ def estimate_seconds(clause: Clause, intended_start: Pose, pose: Pose) -> float:
         target = from_frame(intended_start, w.forward_m, w.left_m, math.radians(w.heading_deg))
         seconds += math.hypot(target[0] - here[0], target[1] - here[1]) / motion.speed_mps
         seconds += abs(target[2] - here[2]) / motion.yaw_rate
+        seconds += SETTLE_PER_WAYPOINT_S
         here = target
     return max(seconds, clause.min_duration_s)
 

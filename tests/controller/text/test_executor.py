@@ -9,7 +9,7 @@ import pytest
 
 from controller.planner.runtime import Planner
 from controller.reference.planned import PlannedReference
-from controller.text.executor import TextReference, TextRunConfig, estimate_seconds, from_frame, to_frame
+from controller.text.executor import SETTLE_PER_WAYPOINT_S, TextReference, TextRunConfig, estimate_seconds, from_frame, to_frame
 from controller.text.kinematic import run_kinematic
 from controller.text.metrics import transition_score
 from controller.text.program import Clause, Motion, Program, Waypoint
@@ -48,8 +48,8 @@ def test_frames_round_trip() -> None:
 
 def test_estimate_counts_path_turns_and_the_minimum() -> None:
     here = (0.0, 0.0, 0.0)
-    assert estimate_seconds(PROGRAM.clauses[0], here, here) == pytest.approx(1.0 / 0.5)
-    assert estimate_seconds(PROGRAM.clauses[1], here, here) == pytest.approx(math.radians(90) / 0.8)
+    assert estimate_seconds(PROGRAM.clauses[0], here, here) == pytest.approx(1.0 / 0.5 + SETTLE_PER_WAYPOINT_S)
+    assert estimate_seconds(PROGRAM.clauses[1], here, here) == pytest.approx(math.radians(90) / 0.8 + SETTLE_PER_WAYPOINT_S)
     assert estimate_seconds(PROGRAM.clauses[2], here, here) == 2.0
 
 
