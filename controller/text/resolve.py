@@ -228,7 +228,7 @@ _SELF_CORRECTION_RE = re.compile(
 )
 _LOWER_ARMS_RE = re.compile(
     r"\b(?:lower|drop|relax|rest) (?:your |both |the )?(?:left |right )?(?:arms?|hands?)\b|\b(?:arms?|hands?) down\b|"
-    r"\bput (?:your |both |the )?(?:arms?|hands?) down\b"
+    r"\bput (?:your |both |the )?(?:arms?|hands?) down\b|^(?:lower|drop|relax) (?:it|them)\b|^(?:put|bring) (?:it|them) (?:back )?down\b"
 )
 # "hold it for 3 seconds" after a gesture: the same gesture, longer.
 _HOLD_RE = re.compile(r"^(?:hold|keep) (?:it|them|that|this|that pose|the pose|your (?:arms?|hands?)|them up|it up)\b")

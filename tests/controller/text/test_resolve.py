@@ -245,6 +245,12 @@ def test_hold_it_keeps_the_gesture_and_lowering_the_arms_is_a_short_stand(encode
     assert lower.gestures == () and lower.motion is None and lower.min_duration_s == 1.0
 
 
+@pytest.mark.parametrize("prompt", ["raise your right hand, then lower it", "raise both arms and then put them down"])
+def test_lowering_it_after_a_gesture_is_a_short_stand(encoder: SentenceEncoder, prompt: str) -> None:
+    raised, lowered = _program(prompt, encoder).clauses
+    assert raised.gestures and lowered.gestures == () and lowered.motion is None and lowered.min_duration_s == 1.0
+
+
 def test_legs_with_their_own_distances_and_a_stated_speed(encoder: SentenceEncoder) -> None:
     (clause,) = _program("walk 2 m forward and 1 m backward at 0.4 meters per second", encoder).clauses
     assert clause.motion is not None and clause.motion.speed_mps == 0.4
