@@ -47,11 +47,12 @@ planner-data: install
 	test -f $(DATA)/g1-moves/manifest.json || $(BIN)/g1ctl dataset import --csv $(G1_MOVES) --out $(DATA)/g1-moves
 
 planner: install-train planner-data
-	$(BIN)/g1ctl train planner --data $(DATA)/rec --data $(DATA)/rec2 --data $(DATA)/g1-moves --out runs/planner
+	$(BIN)/g1ctl train planner --data $(DATA)/rec --data $(DATA)/rec2 --data $(DATA)/g1-moves --data-weights 1,1,2 --out runs/planner
 
 bench-planner: install
 	$(BIN)/g1ctl bench inbetween --data $(DATA)/rec --report runs/bench_inbetween.json
 	$(BIN)/g1ctl bench inbetween --data $(DATA)/g1-moves --report runs/bench_inbetween_g1moves.json
+	$(BIN)/g1ctl bench caption --data $(DATA)/rec --report runs/bench_caption.json
 
 clean:
 	rm -rf runs $(VENV)

@@ -2,10 +2,11 @@
 
 Usage:
     g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45]
-                          [--windows 200] [--seed 0] [--model DIR] --report PATH
+                          [--windows 200] [--seed 0] [--model DIR] [--temperature T] [--split val] --report PATH
 
 Protocol. For each transition length L, up to `--windows` windows are drawn at random
-(seeded) from the test split of the clips: 4 context frames, the L true transition frames,
+(seeded) from the test split of the clips (`--split val`: the validation split, where
+sampling settings are chosen; never tune on test): 4 context frames, the L true transition frames,
 the target frame, and the true frame after the target (only hermite reads it, for its
 arrival velocity). Every method gets the same windows: the context and the full target
 frame (pose and root), and returns the L transition frames plus the frame it puts at the
@@ -78,6 +79,8 @@ class InbetweenConfig:
     seed: int = 0
     assets_dir: str | None = None
     model_dir: Path | None = None
+    temperature: float | None = None  # ours: sampling noise scale (default: the model's)
+    split: str = "test"
     diversity_windows: int = 20
     diversity_seeds: int = 10
     latency_repeats: int = 200
@@ -139,7 +142,7 @@ def _zerovel(cfg: InbetweenConfig) -> Method:
 def _ours(cfg: InbetweenConfig) -> Method:
     from controller.planner.runtime import Planner  # noqa: PLC0415 - the learned planner is optional here
 
-    planner = Planner.load(cfg.model_dir, threads=1)
+    planner = Planner.load(cfg.model_dir, threads=1, temperature=cfg.temperature)
 
     def request(w: Window, seed: int, lengths: tuple[int, ...] | None = None, frame: int | None = None) -> PlanRequest:
         key = Keyframe(frame=w.length if frame is None else frame, qpos=w.target)
@@ -332,34 +335,44 @@ def run_on_clips(clips: Sequence[Clip], cfg: InbetweenConfig, kin: _Kinematics) 
     }
 
 
-def load_test_clips(path: Path) -> Sequence[Clip]:
+def load_test_clips(path: Path, split: str = "test") -> Sequence[Clip]:
     if not Path(path).exists():
         raise ConfigError(f"no motion data at {path}; pass --data with a recorded dataset folder")
+    if split not in ("test", "val"):
+        raise ConfigError(f"the benchmark runs on held-out clips: split 'test' or 'val', got '{split}'")
     from controller.motion_data.dataset import load_dataset  # noqa: PLC0415 - written beside this benchmark
 
-    clips = list(load_dataset(Path(path), split="test"))
+    clips = list(load_dataset(Path(path), split=split))
     if not clips:
-        raise ConfigError(f"no test clips in {path}; the benchmark runs on held-out clips only")
+        raise ConfigError(f"no {split} clips in {path}; the benchmark runs on held-out clips only")
     return clips
 
 
 def run_inbetween_bench(cfg: InbetweenConfig) -> dict[str, Any]:
     """Load the test clips and the G1 kinematics, run every method, return the JSON report."""
     validate(cfg)
-    clips = load_test_clips(cfg.data)
+    clips = load_test_clips(cfg.data, cfg.split)
     from controller.assets import ensure_assets  # noqa: PLC0415 - MuJoCo only for this command
     from sim.kinematics import G1Kinematics  # noqa: PLC0415
 
     kin = G1Kinematics(ensure_assets(cfg.assets_dir, quiet=True).g1_mjcf)
     report = run_on_clips(clips, cfg, kin)
-    return {"benchmark": "inbetween", "data": str(cfg.data), "clips": len(clips), **report}
+    return {
+        "benchmark": "inbetween",
+        "data": str(cfg.data),
+        "split": cfg.split,
+        "clips": len(clips),
+        "temperature": cfg.temperature,
+        **report,
+    }
 
 
 def format_table(report: dict[str, Any]) -> str:
     """The report's results as a readable table: one block per length, one row per method."""
     width = 12
     header = f"{'method':<10}" + "".join(f"{label:>{width}}" for _, label in TABLE_COLUMNS)
-    lines = [f"in-betweening benchmark: {report.get('data', '')} (seed {report['seed']}, {report['fps']:g} fps)"]
+    source = f"{report.get('data', '')}, {report.get('split', 'test')} split"
+    lines = [f"in-betweening benchmark: {source} (seed {report['seed']}, {report['fps']:g} fps)"]
     for length in report["lengths"]:
         key = str(length)
         lines += ["", f"transition {length} frames, {report['windows'][key]} windows", header]

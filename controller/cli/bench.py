@@ -2,7 +2,9 @@
 
 g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
-g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S] --report PATH
+g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
+                      [--temperature T] [--split test|val] --report PATH
+g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
 g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic]
 """
 
@@ -39,6 +41,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     inbetween.add_argument("--windows", type=int, default=200, help="windows per length, at most")
     inbetween.add_argument("--seed", type=int, default=0)
     inbetween.add_argument("--model", type=Path, default=None, help="planner model folder for 'ours' (default: the shipped one)")
+    inbetween.add_argument("--temperature", type=float, default=None, help="ours: sampling noise scale (default: the model's)")
+    inbetween.add_argument("--split", default="test", choices=("test", "val"), help="held-out split (choose settings on val only)")
     inbetween.add_argument("--report", type=Path, default=None)
 
     text = bench_sub.add_parser("text", help="a suite of typed prompts run on the simulated G1: pass/fail, order, transitions")
@@ -48,6 +52,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--policy", default="fastsac")
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
     text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-naive comparison on the composed plans")
+    caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
+    caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
+    caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
+    caption.add_argument("--seeds", type=int, default=8, help="plans per caption and context")
+    caption.add_argument("--windows", type=int, default=200, help="captioned test windows, at most")
+    caption.add_argument("--length", type=int, default=44, help="plan length in frames (multiple of 4, 24-64)")
+    caption.add_argument("--seed", type=int, default=0)
+    caption.add_argument("--report", type=Path, default=None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
         return _inbetween(args)
     if args.bench_command == "text":
         return _text(args)
+    if args.bench_command == "caption":
+        return _caption(args)
     from controller.bench.loop import run_loop_bench  # noqa: PLC0415 - imports MuJoCo
 
     _emit(run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir), args.report)
@@ -73,7 +87,7 @@ def _inbetween(args: argparse.Namespace) -> int:
         raise ConfigError("bench inbetween needs --data PATH: a recorded motion dataset")
     cfg = bi.InbetweenConfig(
         data=args.data, methods=bi.parse_methods(args.methods), lengths=bi.parse_lengths(args.lengths), windows=args.windows,
-        seed=args.seed, assets_dir=args.assets_dir, model_dir=args.model,
+        seed=args.seed, assets_dir=args.assets_dir, model_dir=args.model, temperature=args.temperature, split=args.split,
     )  # fmt: skip
     report = bi.run_inbetween_bench(cfg)
     print(bi.format_table(report))
@@ -99,6 +113,21 @@ def _text(args: argparse.Namespace) -> int:
         progress=lambda line: print(line, file=sys.stderr, flush=True),
     )
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
+    if args.report is not None:
+        write_report(report, args.report)
+        print(f"report: {args.report}")
+    return 0
+
+
+def _caption(args: argparse.Namespace) -> int:
+    from controller.bench import captions as bc  # noqa: PLC0415
+
+    cfg = bc.CaptionConfig(
+        data=args.data, model_dir=args.model, seeds=args.seeds, windows=args.windows, length=args.length, seed=args.seed,
+        assets_dir=args.assets_dir,
+    )  # fmt: skip
+    report = bc.run_caption_bench(cfg)
+    print(bc.format_table(report))
     if args.report is not None:
         write_report(report, args.report)
         print(f"report: {args.report}")

@@ -1,6 +1,7 @@
 """`g1ctl train planner` and `g1ctl viz plan`.
 
-g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N]
+g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N] [--data-weights 1,1,2]
+                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12]
 g1ctl viz plan --out plan.png [--model DIR] [--data DATASET] [--seeds 4] [--length 44]
 g1ctl viz plan --out plan.mp4 --target 1.2,0.4,0.8
 """
@@ -28,6 +29,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     planner.add_argument("--steps", type=int, default=None, help="training steps (default: the shipped model's)")
     planner.add_argument("--seed", type=int, default=0)
     planner.add_argument("--threads", type=int, default=2)
+    planner.add_argument("--data-weights", default=None, help="share of training windows per --data folder, e.g. 1,1,2 (default: equal)")
+    planner.add_argument("--no-mirror", action="store_true", help="do not add left-right mirrored copies of imported clips")
+    planner.add_argument("--text-dropout", type=float, default=None, help="share of windows without text (1: no text at all)")
+    planner.add_argument("--text-variants", type=int, default=None, help="paraphrases per caption, the caption included")
+    planner.add_argument("--free-share", type=float, default=None, help="share of windows with no constraint at all (default 0.1)")
     planner.add_argument("--no-progress", action="store_true")
 
     viz = sub.add_parser("viz", help="pictures and videos of plans")
@@ -54,7 +60,15 @@ def run_train(args: argparse.Namespace) -> int:
         if exc.name != "torch":
             raise
         raise ConfigError("training needs torch: pip install -e '.[train]' (torch==2.13.0)") from exc
-    cfg = TrainConfig(seed=args.seed, threads=args.threads)
+    cfg = TrainConfig(seed=args.seed, threads=args.threads, mirror_imports=not args.no_mirror)
+    if args.data_weights is not None:
+        cfg = replace(cfg, data_weights=_weights(args.data_weights, len(args.data)))
+    if args.text_dropout is not None:
+        cfg = replace(cfg, text_dropout=args.text_dropout)
+    if args.text_variants is not None:
+        cfg = replace(cfg, text_variants=args.text_variants)
+    if args.free_share is not None:
+        cfg = replace(cfg, free_share=args.free_share)
     if args.steps is not None:
         if args.steps < 1:
             raise ConfigError(f"--steps must be at least 1, got {args.steps}")
@@ -63,6 +77,16 @@ def run_train(args: argparse.Namespace) -> int:
     print(json.dumps(summary))
     print(f"model: {args.out}")
     return 0
+
+
+def _weights(text: str, folders: int) -> tuple[float, ...]:
+    try:
+        weights = tuple(float(w) for w in text.split(","))
+    except ValueError as exc:
+        raise ConfigError(f"--data-weights must be comma-separated numbers like 1,1,2, got '{text}'") from exc
+    if len(weights) != folders or min(weights) <= 0:
+        raise ConfigError(f"--data-weights needs {folders} positive numbers, one per --data folder, got '{text}'")
+    return weights
 
 
 @dataclass(frozen=True)

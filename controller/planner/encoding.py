@@ -22,7 +22,8 @@ from hw import g1
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-SPEC_VERSION = 1  # of the exported model's spec (planner.json): bump when this encoding changes
+SPEC_VERSION = 2  # of the exported model's spec (planner.json): bump when this encoding changes
+# 1: a 64-number text slot, never trained. 2: the slot holds an all-MiniLM-L6-v2 sentence embedding (384).
 FRAMES = MAX_LENGTH
 CURVE_STRIDE = 4
 CONTACTS = 2
@@ -53,17 +54,32 @@ COND_DIM = (  # context, curve samples, group masks, length one-hot, text slot a
 )
 
 
+TEXT_SLOT = slice(COND_DIM - TEXT_EMBEDDING_DIM - 1, COND_DIM)  # the text embedding and its presence flag, last
+
+
 def conditioning(
-    context: FloatArray, curve: FloatArray, mask: BoolArray, length: NDArray[np.int64], text: FloatArray | None = None
+    context: FloatArray,
+    curve: FloatArray,
+    mask: BoolArray,
+    length: NDArray[np.int64],
+    text: FloatArray | None = None,
+    has_text: NDArray[np.bool_] | None = None,
 ) -> FloatArray:
-    """[..., COND_DIM] from context channels [..., 4, C], anchor curve and mask [..., F, C], plan length [...]."""
+    """[..., COND_DIM] from context channels [..., 4, C], anchor curve and mask [..., F, C], plan length [...].
+
+    `text` is a sentence embedding [..., 384] (or one for the whole batch); `has_text` [...]
+    says which entries carry one (default: all when `text` is given). An entry without text
+    gets a zero slot and flag 0.
+    """
     batch = context.shape[:-2]
     groups = np.stack([mask[..., idx].mean(axis=-1) for _, idx in GROUPS], axis=-1)  # [..., F, G]
     one_hot = (np.asarray(length)[..., None] == np.array(ALLOWED_LENGTHS)).astype(np.float64)
     if text is None:
         text_part = np.zeros((*batch, TEXT_EMBEDDING_DIM + 1))
     else:
-        text_part = np.concatenate((np.broadcast_to(text, (*batch, TEXT_EMBEDDING_DIM)), np.ones((*batch, 1))), axis=-1)
+        flag = np.ones(batch) if has_text is None else np.broadcast_to(np.asarray(has_text, dtype=np.float64), batch)
+        slot = np.broadcast_to(text, (*batch, TEXT_EMBEDDING_DIM)) * flag[..., None]
+        text_part = np.concatenate((slot, flag[..., None]), axis=-1)
     parts = (
         context.reshape(*batch, -1),
         curve[..., ::CURVE_STRIDE, :].reshape(*batch, -1),

@@ -24,7 +24,8 @@ CONTEXT_FRAMES = 4
 MIN_LENGTH, MAX_LENGTH, LENGTH_STEP = 24, 64, 4
 ALLOWED_LENGTHS = tuple(range(MIN_LENGTH, MAX_LENGTH + 1, LENGTH_STEP))
 MODES = ("inbetween",)  # command-driven modes (idle, walk, ...) arrive with the replanning loop
-TEXT_EMBEDDING_DIM = 64
+TEXT_ENCODER = "all-MiniLM-L6-v2"  # the sentence encoder whose embeddings fill the text slot (controller.text.encoder)
+TEXT_EMBEDDING_DIM = 384  # its output size (controller.text.encoder.ENCODER_DIM)
 
 
 class PlanRequestError(G1Error, ValueError):
@@ -59,7 +60,7 @@ class PlanRequest:
     keyframes: tuple[Keyframe, ...] = ()
     lengths: tuple[int, ...] = (44,)
     mode: str = "inbetween"
-    text_embedding: FloatArray | None = None  # [64], filled by the text planner later
+    text_embedding: FloatArray | None = None  # [384] sentence embedding of a caption (TEXT_ENCODER), or no text
     seed: int = 0
 
     def validated(self) -> PlanRequest:

@@ -20,7 +20,7 @@ from controller.onnx_session import open_session
 from controller.planner import encoding as enc
 from controller.planner import features as ft
 from controller.planner.foot_lock import LegChains, lock_feet
-from controller.planner.request import CONTEXT_FRAMES, Plan, PlanRequest, PlanRequestError
+from controller.planner.request import CONTEXT_FRAMES, TEXT_EMBEDDING_DIM, TEXT_ENCODER, Plan, PlanRequest, PlanRequestError
 from hw import g1
 from hw.errors import AssetError
 from hw.shipped import model_dir as model_dir_of
@@ -40,6 +40,9 @@ class Planner:
         if not 0.0 <= self.temperature <= 2.0:
             raise PlanRequestError(f"sampling temperature {self.temperature} is out of range: use 0 (the mode) to 2")
         self.legs = LegChains.from_spec(spec["legs"]) if foot_lock else None
+        # Whether the text slot was trained (captions in the training windows); an untrained slot is ignored by the model.
+        self.text_conditioned = bool(spec.get("text_conditioned", False))
+        self.text_encoder = str(spec["text_encoder"])
 
     @classmethod
     def load(cls, model_dir: Path | None = None, threads: int = 1, foot_lock: bool = True, temperature: float | None = None) -> Planner:
@@ -55,10 +58,18 @@ class Planner:
             raise AssetError(f"{spec_path} is not valid JSON ({exc}); restore it from the repository") from exc
         if "legs" not in spec or len(spec["legs"]) != 2:
             raise AssetError(f"{spec_path} has no leg chains for foot locking; re-export the model with 'g1ctl train planner'")
-        expected = {"version": enc.SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS}
+        expected = {
+            "version": enc.SPEC_VERSION, "cond_dim": enc.COND_DIM, "frames": enc.FRAMES, "out_channels": enc.OUT_CHANNELS,
+            "text_encoder": TEXT_ENCODER, "text_dim": TEXT_EMBEDDING_DIM,
+        }  # fmt: skip
         wrong = {k: spec.get(k) for k, v in expected.items() if spec.get(k) != v}
         if wrong:
-            raise AssetError(f"planner model in {folder} does not match this runtime ({wrong}, expected {expected}); retrain or update it")
+            hint = ""
+            if spec.get("version", 1) < enc.SPEC_VERSION or "text_encoder" not in spec:
+                hint = f" it was exported before the text slot held {TEXT_ENCODER} sentence embeddings ({TEXT_EMBEDDING_DIM} numbers);"
+            raise AssetError(
+                f"planner model in {folder} does not match this runtime ({wrong}, expected {expected});{hint} retrain or update it"
+            )
         session = open_session(folder / spec["onnx"], AssetError, "planner ONNX", threads)
         return cls(session, spec, foot_lock, temperature)
 

@@ -4,7 +4,7 @@ What `g1ctl plan` and `g1ctl bench text` share: resolution (`resolve`), the prin
 decomposition (`describe`), a simulated run with its report (`simulate`, imports MuJoCo),
 and the composed plan's transition score on paper (`composed_transition`). The planner's
 text slot gets each clause's sentence embedding when the shipped planner was trained with
-text (its spec names the encoder); an older model gets none.
+text (`text_conditioned` in its spec); an older model gets none.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ class TextPlanner:
         from hw.shipped import model_dir  # noqa: PLC0415
 
         spec = json.loads((model_dir("planner") / "planner.json").read_text())
-        return self.encoder.embed_one if spec.get("text_encoder") else None
+        return self.encoder.embed_one if spec.get("text_conditioned") else None
 
     def simulate(
         self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,

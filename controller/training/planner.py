@@ -8,6 +8,12 @@ integrates it in a few Euler steps. Why: a latent of ~100 numbers makes each ste
 hundred thousand multiply-adds (milliseconds on one CPU core for a whole plan), the
 flow gives different plausible motions per seed, and the anchor curve meets the
 constraints exactly whatever is sampled. Requires torch (`pip install -e .[train]`).
+
+Text: each window's caption in force (imported clips: named from their file,
+`controller.training.captions`) is replaced by a random paraphrase, embedded with the
+all-MiniLM-L6-v2 sentence encoder (every distinct string once, before training; cached in
+the run folder as `text_table.npz`), and left out at `text_dropout` so untexted requests
+stay served. Imported (motion capture) clips are also used mirrored left-right.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import logging
 import math
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -26,9 +33,13 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from controller.motion_data.dataset import load_dataset
+from controller.motion_data.dataset import MotionClip, load_dataset
+from controller.motion_data.mirror import mirror_contacts, mirror_qpos
 from controller.planner import encoding as enc
-from controller.training.windows import WindowSampler
+from controller.planner.request import TEXT_EMBEDDING_DIM, TEXT_ENCODER
+from controller.text.paraphrase import mirror_caption
+from controller.training.captions import TextTable, mocap_caption
+from controller.training.windows import TrainClip, WindowSampler
 from hw.errors import ConfigError
 
 log = logging.getLogger(__name__)
@@ -36,7 +47,12 @@ log = logging.getLogger(__name__)
 CHECKPOINT = "checkpoint.pt"
 ONNX_FILE = "planner.onnx"
 SPEC_FILE = "planner.json"
-MODEL_KEYS = ("batch", "lr", "width", "depth", "latent", "pca_windows", "seed")  # a resumed run may change the rest (steps, threads)
+TEXT_TABLE = "text_table.npz"
+MODEL_KEYS = (  # a resumed run may change the rest (steps, threads, sampling)
+    "batch", "lr", "width", "depth", "latent", "pca_windows", "seed", "data_weights", "mirror_imports", "text_dropout",
+    "text_variants", "free_share",
+)  # fmt: skip
+Embed = Callable[[list[str]], np.ndarray]  # strings -> unit sentence embeddings [N, 384]
 
 
 @dataclass(frozen=True)
@@ -48,11 +64,28 @@ class TrainConfig:
     depth: int = 3
     latent: int = 128
     sampling_steps: int = 4
-    temperature: float = 0.35  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
+    temperature: float = 0.2  # noise scale at sampling, chosen on the validation splits (MODEL_CARD.md)
     pca_windows: int = 20000
     seed: int = 0
     threads: int = 2
     checkpoint_every: int = 500
+    data_weights: tuple[float, ...] = ()  # share of training windows per --data folder, in order (empty: equal shares)
+    mirror_imports: bool = True  # also train on imported (motion capture) clips mirrored left-right
+    text_dropout: float = 0.3  # share of windows trained without text; 1 trains no text at all
+    text_variants: int = 12  # paraphrases per caption (the caption itself included)
+    free_share: float = 0.1  # share of windows with no constraint at all (plans from the context and text alone)
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.text_dropout <= 1.0:
+            raise ConfigError(f"text_dropout must be within 0..1, got {self.text_dropout}")
+        if self.text_variants < 1:
+            raise ConfigError(f"text_variants must be at least 1, got {self.text_variants}")
+        if any(not (w > 0 and math.isfinite(w)) for w in self.data_weights):
+            raise ConfigError(f"data_weights must be positive numbers, got {list(self.data_weights)}")
+
+    @property
+    def text_conditioned(self) -> bool:
+        return self.text_dropout < 1.0
 
 
 class FlowNet(nn.Module):
@@ -140,13 +173,27 @@ class LatentCodec:
         return self.components * self.sigma[:, None]
 
 
-def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = TrainConfig(), progress: bool = True) -> dict[str, object]:
-    """Train (or resume) into `out_dir`; write the ONNX planner and its spec. Returns a summary."""
+def train_planner(
+    data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = TrainConfig(), progress: bool = True, embed: Embed | None = None
+) -> dict[str, object]:
+    """Train (or resume) into `out_dir`; write the ONNX planner and its spec. Returns a summary.
+
+    `embed` turns strings into sentence embeddings (default: the shared all-MiniLM-L6-v2 encoder).
+    """
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)  # weights, flow noise and times: a run is repeatable on one machine
     out_dir.mkdir(parents=True, exist_ok=True)
-    train = _sampler(data_dirs, "train")
-    val = _sampler(data_dirs, "val")
+    if cfg.data_weights and len(cfg.data_weights) != len(data_dirs):
+        raise ConfigError(f"{len(cfg.data_weights)} data weights for {len(data_dirs)} --data folders; give one per folder")
+    train_clips = _clips(data_dirs, "train", cfg.mirror_imports)
+    val_clips = _clips(data_dirs, "val", mirror=False)
+    table = None
+    if cfg.text_conditioned:
+        captions = {text for group in train_clips + val_clips for clip in group for _, text in clip.captions}
+        table = _text_table(out_dir / TEXT_TABLE, captions, cfg, embed)
+    weights = cfg.data_weights or None
+    train = WindowSampler(train_clips, group_weights=weights, text=table, free_share=cfg.free_share)
+    val = WindowSampler(val_clips, group_weights=weights, text=table, free_share=cfg.free_share)
     checkpoint_path = out_dir / CHECKPOINT
     started = time.monotonic()
     if checkpoint_path.is_file():
@@ -187,8 +234,10 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
         bar.update(1)
         bar.set_postfix(loss=f"{running:.3f}")
         if step % cfg.checkpoint_every == 0 or step == cfg.steps:
-            val_loss = _validation_loss(net, val, codec)
-            history.append({"step": step, "train_loss": round(running, 4), "val_loss": round(val_loss, 4)})
+            val_loss, val_no_text = _validation_loss(net, val, codec)
+            history.append(
+                {"step": step, "train_loss": round(running, 4), "val_loss": round(val_loss, 4), "val_loss_no_text": round(val_no_text, 4)}
+            )
             _save_checkpoint(
                 checkpoint_path,
                 net,
@@ -212,6 +261,8 @@ def train_planner(data_dirs: list[Path], out_dir: Path, cfg: TrainConfig = Train
         "latent_explained_variance": round(explained, 4),
         "history": history[-5:],
         "parameters": sum(p.numel() for p in net.parameters()),
+        "text_strings": 0 if table is None else len(table.embeddings),
+        "captions": 0 if table is None else len(table.rows),
     }
     (out_dir / "training.json").write_text(
         json.dumps(summary | {"config": asdict(cfg), "data": [str(d) for d in data_dirs]}, indent=2) + "\n"
@@ -240,6 +291,9 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
         "sampling_steps": cfg.sampling_steps,
         "temperature": cfg.temperature,
         "fps": 30,
+        "text_encoder": TEXT_ENCODER,
+        "text_dim": TEXT_EMBEDDING_DIM,
+        "text_conditioned": cfg.text_conditioned,
         "legs": _leg_chains(),
     }
     (out_dir / SPEC_FILE).write_text(json.dumps(spec, indent=2) + "\n")
@@ -255,11 +309,54 @@ def _leg_chains() -> list[dict[str, Any]]:
     return leg_chain_specs(build_model(ensure_assets(quiet=True).g1_mjcf))
 
 
-def _sampler(data_dirs: list[Path], split: str) -> WindowSampler:
-    groups = [[(c.qpos, c.contacts.astype(np.float64)) for c in load_dataset(d, split=split)] for d in data_dirs]
+def training_clips(clip: MotionClip, mirror: bool) -> list[TrainClip]:
+    """A dataset clip as training windows read it; an imported clip captioned from its name, and mirrored too if `mirror`."""
+    captions = clip.captions
+    imported = clip.source.startswith("csv:")
+    if imported and not captions:
+        captions = ((0, mocap_caption(clip.name)),)
+    out = [TrainClip(clip.qpos, clip.contacts.astype(np.float64), captions)]
+    if imported and mirror:
+        mirrored = tuple((frame, mirror_caption(text)) for frame, text in captions)
+        out.append(TrainClip(mirror_qpos(clip.qpos), mirror_contacts(clip.contacts).astype(np.float64), mirrored))
+    return out
+
+
+def _clips(data_dirs: list[Path], split: str, mirror: bool) -> list[list[TrainClip]]:
+    groups = [[tc for c in load_dataset(d, split=split) for tc in training_clips(c, mirror)] for d in data_dirs]
     if not any(groups):
         raise ConfigError(f"no '{split}' clips in {', '.join(map(str, data_dirs))}; record one with 'g1ctl dataset record'")
-    return WindowSampler(groups)
+    return groups
+
+
+def _text_table(path: Path, captions: set[str], cfg: TrainConfig, embed: Embed | None) -> TextTable:
+    """Paraphrases of every caption, embedded once; reused from `path` when it holds the same strings."""
+    cached: dict[str, np.ndarray] = {}
+    if path.is_file():
+        with np.load(path, allow_pickle=False) as z:
+            cached = dict(zip((str(s) for s in z["strings"]), z["embeddings"], strict=True))
+
+    def embed_missing(strings: list[str]) -> np.ndarray:
+        missing = [s for s in strings if s not in cached]
+        if missing:
+            encode = embed if embed is not None else _shared_embed()
+            started = time.monotonic()
+            vectors = np.asarray(encode(missing), dtype=np.float64)
+            if vectors.shape != (len(missing), TEXT_EMBEDDING_DIM):
+                raise ConfigError(f"the text encoder returned shape {list(vectors.shape)}, expected [{len(missing)}, {TEXT_EMBEDDING_DIM}]")
+            log.info("embedded %d strings in %.1f s", len(missing), time.monotonic() - started)
+            cached.update(zip(missing, vectors, strict=True))
+        return np.stack([cached[s] for s in strings]) if strings else np.zeros((0, TEXT_EMBEDDING_DIM))
+
+    table, strings = TextTable.build(captions, embed_missing, cfg.text_variants, cfg.text_dropout, cfg.seed)
+    np.savez(path, strings=np.array(strings, dtype=np.str_), embeddings=table.embeddings.astype(np.float32))
+    return table
+
+
+def _shared_embed() -> Embed:
+    from controller.text.encoder import shared_encoder  # noqa: PLC0415 - loads the encoder's weights
+
+    return shared_encoder().embed
 
 
 def _fit_statistics(train: WindowSampler, cfg: TrainConfig) -> tuple[LatentCodec, tuple[np.ndarray, np.ndarray], float]:
@@ -285,11 +382,18 @@ def _flow_loss(net: FlowNet, x1: torch.Tensor, cond: torch.Tensor, generator: to
     return torch.mean((net.velocity(xt, t, net.encode(cond)) - (x1 - x0)) ** 2)
 
 
-def _validation_loss(net: FlowNet, val: WindowSampler, codec: LatentCodec) -> float:
+def _validation_loss(net: FlowNet, val: WindowSampler, codec: LatentCodec) -> tuple[float, float]:
+    """Flow loss on fixed validation windows: as sampled (text where drawn), and with every text slot emptied."""
     batch = val.sample(np.random.default_rng(1234), 1024)
+    no_text = batch.cond.copy()
+    no_text[:, enc.TEXT_SLOT] = 0.0
     with torch.no_grad():  # its own noise stream: the training stream is left where it was
         x1 = torch.as_tensor(codec.encode(batch.target), dtype=torch.float32)
-        return float(_flow_loss(net, x1, torch.as_tensor(batch.cond, dtype=torch.float32), torch.Generator().manual_seed(1234)))
+        losses = [
+            float(_flow_loss(net, x1, torch.as_tensor(cond, dtype=torch.float32), torch.Generator().manual_seed(1234)))
+            for cond in (batch.cond, no_text)
+        ]
+    return losses[0], losses[1]
 
 
 def _save_checkpoint(path: Path, net, optimizer, schedule, rng, step, elapsed, history, cfg, codec, cond_stats, explained) -> None:

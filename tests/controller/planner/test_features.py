@@ -7,7 +7,7 @@ import pytest
 
 from controller.planner import encoding as enc
 from controller.planner import features as ft
-from controller.planner.request import Keyframe, PlanRequest, PlanRequestError, target_root
+from controller.planner.request import TEXT_EMBEDDING_DIM, Keyframe, PlanRequest, PlanRequestError, target_root
 from hw import quat
 from tests.conftest import turning_walk
 
@@ -58,6 +58,21 @@ def test_conditioning_has_the_declared_size() -> None:
     assert cond.shape == (3, enc.COND_DIM)
 
 
+def test_text_slot_per_window_and_its_flag() -> None:
+    rng = np.random.default_rng(0)
+    args = (rng.normal(size=(3, 4, 36)), rng.normal(size=(3, 64, 36)), np.zeros((3, 64, 36), bool), np.array([24, 44, 64]))
+    text = rng.normal(size=(3, TEXT_EMBEDDING_DIM))
+    cond = enc.conditioning(*args, text, np.array([True, False, True]))
+    slot = cond[:, enc.TEXT_SLOT]
+    assert slot.shape == (3, TEXT_EMBEDDING_DIM + 1)
+    assert np.allclose(slot[0, :-1], text[0]) and slot[0, -1] == 1.0
+    assert not slot[1].any()  # no text: zeros and flag 0
+    assert np.allclose(enc.conditioning(*args)[:, enc.TEXT_SLOT], 0.0)
+    one = enc.conditioning(*args, text[0])  # one embedding for the whole batch, all flagged
+    assert np.allclose(one[:, enc.TEXT_SLOT][:, :-1], text[0]) and (one[:, -1] == 1).all()
+    assert np.allclose(cond[:, : enc.TEXT_SLOT.start], one[:, : enc.TEXT_SLOT.start])  # text touches nothing else
+
+
 def test_request_validation_names_the_problem() -> None:
     context = turning_walk()[:4]
     good = PlanRequest(context, (Keyframe(30, turning_walk()[34]), target_root(43, 1.0, 0.0, 0.0)), (44,))
@@ -70,7 +85,7 @@ def test_request_validation_names_the_problem() -> None:
         "outside a plan of at most 44 frames": PlanRequest(context, (Keyframe(50, context[0]),)),
         "joint mask must have 29 entries": PlanRequest(context, (Keyframe(5, context[0], joints=np.ones(3, bool)),)),
         "two keyframes at the same frame": PlanRequest(context, (Keyframe(5, context[0]), Keyframe(5, context[1]))),
-        "text embedding must have shape [64]": PlanRequest(context, text_embedding=np.zeros(3)),
+        "text embedding must have shape [384]": PlanRequest(context, text_embedding=np.zeros(3)),
     }
     for message, request in cases.items():
         with pytest.raises(PlanRequestError, match=message.replace("[", r"\[").replace("]", r"\]")):

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 
 from controller.motion_data.dataset import MotionClip, save_dataset
-from controller.planner.request import Keyframe, PlanRequest, PlanRequestError, target_root
+from controller.planner.request import TEXT_EMBEDDING_DIM, Keyframe, PlanRequest, PlanRequestError, target_root
 from controller.planner.runtime import Planner
 from hw.errors import AssetError
 from tests.conftest import g1ctl, one_line_error, turning_walk
+from tests.controller.training.test_captions import fake_embed
 
 torch = pytest.importorskip("torch")
 
@@ -27,15 +28,21 @@ TINY = TrainConfig(steps=30, batch=32, width=64, depth=1, latent=16, sampling_st
 @pytest.fixture(scope="module")
 def tiny_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("planner")
+    captions = (((0, "walk forward"), (100, "turn left in place")), ((0, "walk forward slowly while waving the right hand"),))
     clips = [
-        MotionClip(f"walk{i}", turning_walk(200, yaw0=i, turn=0.01 * i, seed=i), np.zeros((200, 2), bool), split)
+        MotionClip(f"walk{i}", turning_walk(200, yaw0=i, turn=0.01 * i, seed=i), np.zeros((200, 2), bool), split, captions=captions[i % 2])
         for i, split in enumerate(("train", "train", "train", "val", "test"))
     ]
     save_dataset(root / "data", clips, seed=0)
-    train_planner([root / "data"], root / "model", replace(TINY, steps=15), progress=False)
-    summary = train_planner([root / "data"], root / "model", TINY, progress=False)  # resumes at step 15
+    imported = [MotionClip("dance-J_Dance2_Salsa", turning_walk(150, seed=9), np.zeros((150, 2), bool), "train", source="csv:x.csv")]
+    save_dataset(root / "mocap", imported, seed=0)
+    data = [root / "data", root / "mocap"]
+    train_planner(data, root / "model", replace(TINY, steps=15), progress=False, embed=fake_embed)
+    summary = train_planner(data, root / "model", TINY, progress=False, embed=fake_embed)  # resumes at step 15
     assert summary["steps"] == 30
-    assert [h["step"] for h in json.loads((root / "model" / "training.json").read_text())["history"]] == [15, 30]
+    training = json.loads((root / "model" / "training.json").read_text())
+    assert [h["step"] for h in training["history"]] == [15, 30] and "val_loss_no_text" in training["history"][-1]
+    assert summary["captions"] == 4  # three recorded captions and the imported clip's name (mirrored: the same words)
     return root / "model"
 
 
@@ -60,6 +67,38 @@ def test_invalid_requests_and_missing_models_are_named(tiny_model: Path, tmp_pat
         planner.plan(PlanRequest(np.full((4, 36), np.nan)))
     with pytest.raises(AssetError, match="no planner model"):
         Planner.load(tmp_path)
+
+
+def test_a_caption_conditions_the_plan(tiny_model: Path) -> None:
+    planner = Planner.load(tiny_model)
+    assert planner.text_conditioned and planner.text_encoder == "all-MiniLM-L6-v2"
+    walk = turning_walk(100, seed=7)
+    request = PlanRequest(walk[:4], (target_root(43, 1.0, 0.0, 0.0),), lengths=(44,))
+    text = fake_embed(["turn left in place"])[0]
+    plain, texted = planner.plan(request), planner.plan(replace(request, text_embedding=text))
+    assert not np.allclose(plain.qpos, texted.qpos)  # the text slot reaches the network
+    assert np.allclose(texted.qpos[43, :2], [1.0, 0.0])  # and constraints stay exact
+    with pytest.raises(PlanRequestError, match=rf"text embedding must have shape \[{TEXT_EMBEDDING_DIM}\]"):
+        planner.plan(replace(request, text_embedding=np.zeros(64)))
+
+
+def test_a_model_without_the_text_encoder_is_refused(tiny_model: Path, tmp_path: Path) -> None:
+    for name, change in {
+        "v1": {"version": 1, "cond_dim": 1116},  # the 64-number slot of spec version 1
+        "no-encoder": {"text_encoder": None},
+        "other-encoder": {"text_encoder": "some-other-encoder"},
+    }.items():
+        folder = tmp_path / name
+        folder.mkdir()
+        spec = json.loads((tiny_model / "planner.json").read_text()) | change
+        spec = {k: v for k, v in spec.items() if v is not None}
+        (folder / "planner.json").write_text(json.dumps(spec))
+        (folder / "planner.onnx").write_bytes((tiny_model / "planner.onnx").read_bytes())
+        with pytest.raises(AssetError, match="does not match this runtime") as info:
+            Planner.load(folder)
+        assert "retrain" in str(info.value) and "\n" not in str(info.value)
+        if name != "other-encoder":
+            assert "all-MiniLM-L6-v2 sentence embeddings" in str(info.value)
 
 
 def test_runtime_never_imports_torch(tiny_model: Path) -> None:
