@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import time
+import zlib
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -132,3 +133,14 @@ def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
             return False
         time.sleep(0.005)
     return True
+
+
+_TEXT_DIM = 384  # the planner's text slot (controller.planner.request.TEXT_EMBEDDING_DIM)
+
+
+def fake_embed(strings: list[str]) -> np.ndarray:
+    """A stand-in sentence encoder: a unit vector per string, stable across runs."""
+    if not strings:
+        return np.zeros((0, _TEXT_DIM))
+    out = np.stack([np.random.default_rng(zlib.crc32(s.encode())).standard_normal(_TEXT_DIM) for s in strings])
+    return out / np.linalg.norm(out, axis=1, keepdims=True)

@@ -5,6 +5,7 @@ g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
+g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic]
 """
 
 from __future__ import annotations
@@ -44,6 +45,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     inbetween.add_argument("--split", default="test", choices=("test", "val"), help="held-out split (choose settings on val only)")
     inbetween.add_argument("--report", type=Path, default=None)
 
+    text = bench_sub.add_parser("text", help="a suite of typed prompts run on the simulated G1: pass/fail, order, transitions")
+    text.add_argument("--suite", type=Path, default=None, help="prompt suite YAML (default: the shipped configs/prompts/suite.yaml)")
+    text.add_argument("--report", type=Path, default=None)
+    text.add_argument("--seed", type=int, default=0)
+    text.add_argument("--policy", default="fastsac")
+    text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
+    text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-naive comparison on the composed plans")
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
     caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
@@ -62,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.bench_command == "inbetween":
         return _inbetween(args)
+    if args.bench_command == "text":
+        return _text(args)
     if args.bench_command == "caption":
         return _caption(args)
     from controller.bench.loop import run_loop_bench  # noqa: PLC0415 - imports MuJoCo
@@ -81,6 +91,28 @@ def _inbetween(args: argparse.Namespace) -> int:
     )  # fmt: skip
     report = bi.run_inbetween_bench(cfg)
     print(bi.format_table(report))
+    if args.report is not None:
+        write_report(report, args.report)
+        print(f"report: {args.report}")
+    return 0
+
+
+def _text(args: argparse.Namespace) -> int:
+    import sys  # noqa: PLC0415
+
+    from controller.bench.text import TextBenchConfig, run_text_bench  # noqa: PLC0415
+    from controller.text.service import TextPlanner  # noqa: PLC0415
+
+    cfg = TextBenchConfig(suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic)
+    planner = TextPlanner.load()
+    report = run_text_bench(
+        cfg,
+        planner.resolve,
+        lambda program: planner.simulate(program, seed=args.seed, policy=args.policy),
+        lambda program, blend: planner.composed_transition(program, blend, args.seed),
+        progress=lambda line: print(line, file=sys.stderr, flush=True),
+    )
+    print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
     if args.report is not None:
         write_report(report, args.report)
         print(f"report: {args.report}")

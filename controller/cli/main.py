@@ -4,7 +4,8 @@ Usage (each command group's module shows its own):
     g1ctl sim ...                 run a scenario on the simulated G1 (controller/cli/sim.py)
     g1ctl run ...                 drive it through the planner: viewer or headless, keyboard, gamepad (controller/cli/run.py)
     g1ctl hw ...                  bench bring-up on real or simulated hardware (controller/cli/hw.py)
-    g1ctl bench loop|hw|inbetween benchmarks with JSON reports (controller/cli/bench.py)
+    g1ctl plan "PROMPT" [--sim]   a typed instruction planned into clauses, run on the simulated G1 (controller/cli/plan.py)
+    g1ctl bench loop|hw|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
     g1ctl dataset record|import|info   the planner's motion dataset (controller/cli/dataset.py)
     g1ctl train planner, g1ctl viz plan   the planner (controller/cli/planner.py)
     g1ctl assets fetch|path, g1ctl scenarios   assets, and what ships by name (controller/cli/catalog.py)
@@ -23,14 +24,14 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from controller.cli import bench, catalog, dataset, planner, run, sim
+from controller.cli import bench, catalog, dataset, plan, planner, run, sim
 from controller.cli import hw as hw_commands
 from hw.errors import G1Error, HardwareFault, RunAborted
 
 # Command name -> the module that parses it and runs it. Each module imports its heavy
 # dependencies (MuJoCo, onnxruntime, torch) only when its command runs.
 COMMANDS: dict[str, ModuleType] = {
-    "sim": sim, "run": run, "hw": hw_commands, "bench": bench, "dataset": dataset,
+    "sim": sim, "run": run, "hw": hw_commands, "plan": plan, "bench": bench, "dataset": dataset,
     "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog,
 }  # fmt: skip
 

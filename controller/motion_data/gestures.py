@@ -62,7 +62,14 @@ def _arm(side: str, **angles: float) -> dict[str, float]:
 # Static poses (rad), chosen with forward kinematics: no self-contact, within the joint
 # limits, hands where the names say. Arm gains are low (kp 14), so the arms sag a little
 # under gravity; the recorded qpos is what the robot did, not these targets.
-_RAISED = {"shoulder_pitch": -2.8, "shoulder_roll": 0.45, "shoulder_yaw": 0.0, "elbow": 1.3, "wrist_roll": 0.0, "wrist_pitch": 0.0}
+# Raised: the upper arm out to the side and up, the forearm up ("hands up"). Until 2026-12-01 it
+# was overhead by the front (shoulder pitch -2.8, the pose of the recorded datasets rec and rec2):
+# standing, both arms raised that way pitched the robot 7 degrees forward and the locomotion
+# policy, blind to its arms, ran after the lean and fell within 4 s (3 of 3 seeds); raised by the
+# side it stood (3 of 3, 8 s). The roll is near its limit (2.25 rad) so that the arms, sagging under
+# gravity on their low gains, still hold the palms 0.26-0.28 m above the shoulders (0.12-0.17 m at
+# a roll of 2.0, under the gesture detector's 0.15 m).
+_RAISED = {"shoulder_pitch": 0.0, "shoulder_roll": 2.15, "shoulder_yaw": 1.5, "elbow": 0.5, "wrist_roll": 0.0, "wrist_pitch": 0.0}
 _WAVE = {"shoulder_pitch": -0.2, "shoulder_roll": 1.3, "shoulder_yaw": 1.4, "elbow": 0.0, "wrist_roll": 0.0, "wrist_pitch": 0.0}
 _REACH = {"shoulder_pitch": -1.8, "shoulder_roll": 0.15, "shoulder_yaw": 0.0, "elbow": 1.35, "wrist_roll": 0.0, "wrist_pitch": 0.0}
 _POINT = {"shoulder_pitch": -1.75, "shoulder_roll": 0.5, "shoulder_yaw": 0.0, "elbow": 1.5, "wrist_roll": 0.0, "wrist_pitch": 0.0}

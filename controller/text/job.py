@@ -3,20 +3,19 @@
 Build the `g1ctl sim` run on the `stand` scenario with the planner in the loop, put a
 `TextReference` over the planned reference, end the run once the last clause has ended
 and the robot has had a moment to come to rest, then add the text report (clauses,
-totals, order, transitions) to the run's report. Imports MuJoCo (through `sim_run`).
+totals, order, transitions) to the run's report. The simulated run imports MuJoCo (through
+`sim_run`) when it starts; the composed plan on paper (`composed_transition_score`) does not.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from controller.inputs.base import CommandLimits
 from controller.reference.planned import PlannedReference
 from controller.reports import write_report
-from controller.runtime.sim_run import RunHooks, SimRunConfig
-from controller.runtime.sim_run import run as run_sim
 from controller.text.executor import TextReference, TextRunConfig, estimate_seconds
 from controller.text.metrics import Embed
 from controller.text.program import Program
@@ -41,7 +40,7 @@ def budget_seconds(program: Program, cfg: TextRunConfig) -> float:
     """Simulated time the run may take: every clause's timeout, plus the settling at the end."""
     seconds, here = SETTLE_S, (0.0, 0.0, 0.0)
     for clause in program.clauses:
-        seconds += 2.0 * estimate_seconds(clause, here, here) + cfg.timeout_margin_s
+        seconds += cfg.timeout_factor * estimate_seconds(clause, here, here) + cfg.timeout_margin_s
     return min(seconds, MAX_SECONDS)
 
 
@@ -50,6 +49,9 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
 
     `text_embedding`: clause text -> the planner's text conditioning (None: the planner gets no text).
     """
+    from controller.runtime.sim_run import RunHooks, SimRunConfig  # noqa: PLC0415 - imports MuJoCo
+    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415
+
     holder: list[TextReference] = []
 
     def wrap(planned: PlannedReference, limits: CommandLimits) -> TextReference:
@@ -72,3 +74,21 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     if cfg.report is not None:
         write_report(out, cfg.report)
     return out
+
+
+def composed_transition_score(
+    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None
+) -> float | None:
+    """The transition score of `program` composed on paper (perfect tracking): blended joins, or naive ones with None."""
+    from controller.text.kinematic import run_kinematic  # noqa: PLC0415
+    from controller.text.metrics import transition_score  # noqa: PLC0415
+    from controller.text.report import reference_with_boundaries  # noqa: PLC0415
+
+    cfg = replace(TextRunConfig(), blend_frames=blend_frames)
+    reference = TextReference(program, PlannedReference(plan, seed=seed, perfect_tracking=True), cfg, embed=text_embedding)
+    try:
+        run_kinematic(reference, max_seconds=budget_seconds(program, reference.cfg))
+    finally:
+        reference.close()
+    frames, boundaries = reference_with_boundaries(reference)
+    return transition_score(frames, boundaries) if len(frames) else None

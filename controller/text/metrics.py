@@ -2,10 +2,15 @@
 
 `order_assignment` follows Text2BFM's order accuracy with a frozen embedder: each executed
 segment is described from its measured motion only (displacement, heading change, the
-gestures the detector saw) as a short sentence, embedded by the same frozen sentence
-encoder as the clauses, and matched to the clause it is most similar to. The prompt is in
-order when segment i matches clause i for every i (the assignment is increasing and
-complete). Identical clause texts are interchangeable: a tie goes to the segment's own index.
+gestures the detector saw) as a short sentence, embedded by the frozen sentence encoder,
+and matched to the clause whose embedding is most similar. A clause is embedded from what
+it was resolved to, in the same words (`clause_caption`): raw phrasing ("back up one
+meter") lands further from "walk backward 1.0 meters" in MiniLM's space than an unrelated
+clause with shared words does, which would measure the encoder, not the execution. The
+prompt is in order when segment i matches clause i for every i (the assignment is
+increasing and complete). Clauses with the same caption are interchangeable: a tie goes to
+the segment's own index. Captions round distances to 0.5 m and turns to 45 degrees: MiniLM
+tells "2.0" from "1.0" but not reliably "1.9" from "1.0".
 
 `transition_score` follows Text2BFM's transition measure: at each clause boundary, the
 largest jump of the reference pose (root position in m and the 29 joint angles in rad, as
@@ -19,13 +24,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from controller.text.program import DETECTED_GESTURES, Clause
 from hw import g1
 from hw.types import FloatArray
 
-Embed = Callable[[Sequence[str]], FloatArray]  # texts -> unit vectors [N, D]
+Embed = Callable[[Sequence[str]], NDArray[np.floating[Any]]]  # texts -> unit vectors [N, D]
 
 _GESTURE_PHRASES = {
     "wave_left": "wave the left hand",
@@ -44,29 +52,37 @@ def motion_caption(forward_m: float, left_m: float, heading_deg: float, gestures
     parts = []
     distance = math.hypot(forward_m, left_m)
     if distance >= MIN_DISTANCE_M:
+        meters = max(0.5, round(distance * 2.0) / 2.0)
         if abs(forward_m) >= abs(left_m):
-            parts.append(f"walk {'forward' if forward_m > 0 else 'backward'} {distance:.1f} meters")
+            parts.append(f"walk {'forward' if forward_m > 0 else 'backward'} {meters:.1f} meters")
         else:
-            parts.append(f"step to the {'left' if left_m > 0 else 'right'} {distance:.1f} meters")
+            parts.append(f"step to the {'left' if left_m > 0 else 'right'} {meters:.1f} meters")
     if abs(heading_deg) >= MIN_TURN_DEG:
-        parts.append(f"turn {'left' if heading_deg > 0 else 'right'} {abs(heading_deg):.0f} degrees")
+        degrees = max(45, round(abs(heading_deg) / 45.0) * 45)
+        parts.append(f"turn {'left' if heading_deg > 0 else 'right'} {degrees} degrees")
     base = " and ".join(parts) or "stand still"
     edits = [_GESTURE_PHRASES[g] for g in gestures if g in _GESTURE_PHRASES]
     return f"{base} and {' and '.join(edits)}" if edits else base
 
 
-def order_assignment(segment_captions: Sequence[str], clause_texts: Sequence[str], embed: Embed) -> list[int]:
-    """For each executed segment, the index of the clause whose text embedding is closest to its caption's."""
+def clause_caption(clause: Clause) -> str:
+    """The clause as resolved, in the words of `motion_caption`: its goal displacement, turn and detectable gestures."""
+    forward, left, heading = clause.displacement
+    return motion_caption(forward, left, heading, [g for g in clause.gestures if g in DETECTED_GESTURES])
+
+
+def order_assignment(segment_captions: Sequence[str], clause_captions: Sequence[str], embed: Embed) -> list[int]:
+    """For each executed segment, the index of the clause whose caption embedding is closest to the segment's."""
     if not segment_captions:
         return []
     segments = embed(list(segment_captions))
-    clauses = embed(list(clause_texts))
+    clauses = embed(list(clause_captions))
     similarity = segments @ clauses.T
     out = []
     for i, row in enumerate(similarity):
         best = int(np.argmax(row))
-        if i < len(clause_texts) and clause_texts[i] == clause_texts[best]:
-            best = i  # the same text twice: either clause is this one
+        if i < len(clause_captions) and clause_captions[i] == clause_captions[best]:
+            best = i  # the same caption twice: either clause is this one
         out.append(best)
     return out
 

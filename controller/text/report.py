@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from controller.text.executor import TextReference, to_frame
-from controller.text.metrics import Embed, in_order, motion_caption, order_assignment, transition_score
+from controller.text.metrics import Embed, clause_caption, in_order, motion_caption, order_assignment, transition_score
 from hw.types import FloatArray
 
 Detect = Callable[[FloatArray, float], tuple[str, ...]]  # executed qpos [T, 36] at a rate (Hz) -> gesture names
@@ -44,11 +44,11 @@ def text_report(reference: TextReference, rate_hz: float, embed: Embed, detect: 
                 "motion_caption": captions[-1],
             }
         )  # fmt: skip
-    texts = [c.text for c in reference.program.clauses]
+    texts = [clause_caption(c) for c in reference.program.clauses]
     assignment = order_assignment(captions, texts, embed) if records else []
     complete = len(records) == len(texts)
     total = to_frame(records[0].start_pose, records[-1].end_pose) if records and records[-1].end_pose else (0.0, 0.0)
-    reference_frames, boundaries = _reference_with_boundaries(reference)
+    reference_frames, boundaries = reference_with_boundaries(reference)
     score = transition_score(reference_frames, boundaries) if len(reference_frames) else None
     return {
         "prompt": reference.program.prompt,
@@ -63,7 +63,7 @@ def text_report(reference: TextReference, rate_hz: float, embed: Embed, detect: 
     }
 
 
-def _reference_with_boundaries(reference: TextReference) -> tuple[FloatArray, list[int]]:
+def reference_with_boundaries(reference: TextReference) -> tuple[FloatArray, list[int]]:
     """All clauses' reference frames in one array, and the tick index where each clause after the first begins."""
     frames: list[FloatArray] = []
     boundaries = []

@@ -49,8 +49,8 @@ ONNX_FILE = "planner.onnx"
 SPEC_FILE = "planner.json"
 TEXT_TABLE = "text_table.npz"
 MODEL_KEYS = (  # a resumed run may change the rest (steps, threads, sampling)
-    "batch", "lr", "width", "depth", "latent", "pca_windows", "seed",
-    "data_weights", "mirror_imports", "text_dropout", "text_variants", "free_share",
+    "batch", "lr", "width", "depth", "latent", "pca_windows", "seed", "data_weights", "mirror_imports", "text_dropout",
+    "text_variants", "free_share",
 )  # fmt: skip
 Embed = Callable[[list[str]], np.ndarray]  # strings -> unit sentence embeddings [N, 384]
 

@@ -13,7 +13,7 @@ from controller.planner.request import CONTEXT_FRAMES, FPS, PlanRequest
 from hw import g1, quat
 from hw.errors import ConfigError
 from sim.kinematics import G1Kinematics
-from tests.controller.training.test_captions import fake_embed
+from tests.conftest import fake_embed
 
 
 @dataclass(frozen=True)

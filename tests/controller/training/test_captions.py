@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import zlib
-
 import numpy as np
 import pytest
 
@@ -14,15 +12,7 @@ from controller.planner.request import TEXT_EMBEDDING_DIM
 from controller.training.captions import TextTable, caption_in_force, mocap_caption
 from controller.training.windows import TrainClip, WindowSampler, random_constraints
 from hw import g1
-from tests.conftest import turning_walk
-
-
-def fake_embed(strings: list[str]) -> np.ndarray:
-    """A stand-in sentence encoder: a unit vector per string, stable across runs."""
-    if not strings:
-        return np.zeros((0, TEXT_EMBEDDING_DIM))
-    out = np.stack([np.random.default_rng(zlib.crc32(s.encode())).standard_normal(TEXT_EMBEDDING_DIM) for s in strings])
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
+from tests.conftest import fake_embed, turning_walk
 
 
 @pytest.mark.parametrize(

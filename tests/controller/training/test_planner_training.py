@@ -15,8 +15,7 @@ from controller.motion_data.dataset import MotionClip, save_dataset
 from controller.planner.request import TEXT_EMBEDDING_DIM, Keyframe, PlanRequest, PlanRequestError, target_root
 from controller.planner.runtime import Planner
 from hw.errors import AssetError
-from tests.conftest import g1ctl, one_line_error, turning_walk
-from tests.controller.training.test_captions import fake_embed
+from tests.conftest import fake_embed, g1ctl, one_line_error, turning_walk
 
 torch = pytest.importorskip("torch")
 

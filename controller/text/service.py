@@ -1,0 +1,67 @@
+"""The text planner as one object: the sentence encoder loaded once, prompts resolved, programs run.
+
+What `g1ctl plan` and `g1ctl bench text` share: resolution (`resolve`), the printable
+decomposition (`describe`), a simulated run with its report (`simulate`, imports MuJoCo),
+and the composed plan's transition score on paper (`composed_transition`). The planner's
+text slot gets each clause's sentence embedding when the shipped planner was trained with
+text (`text_conditioned` in its spec); an older model gets none.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from controller.text.encoder import SentenceEncoder, shared_encoder
+from controller.text.gesture_detector import detect_gestures
+from controller.text.program import Program
+from controller.text.resolve import describe_program, plan_program
+
+
+class TextPlanner:
+    def __init__(self, encoder: SentenceEncoder) -> None:
+        self.encoder = encoder
+        self._planner: Any = None
+
+    @classmethod
+    def load(cls) -> TextPlanner:
+        return cls(shared_encoder())
+
+    def resolve(self, prompt: str) -> Program:
+        """The program of `prompt`, or `PromptRefused` naming what cannot be planned."""
+        return plan_program(prompt, self.encoder)
+
+    def describe(self, program: Program) -> str:
+        return describe_program(program)
+
+    def text_embedding(self) -> Any:
+        """Clause text -> the planner's text conditioning, or None when the shipped planner was not trained with text."""
+        import json  # noqa: PLC0415
+
+        from hw.shipped import model_dir  # noqa: PLC0415
+
+        spec = json.loads((model_dir("planner") / "planner.json").read_text())
+        return self.encoder.embed_one if spec.get("text_conditioned") else None
+
+    def simulate(
+        self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,
+        blend: bool = True, progress: bool = False,
+    ) -> dict[str, Any]:  # fmt: skip
+        """Run `program` on the simulated G1: the text report, with the run's report under "run"."""
+        from controller.text.job import TextSimConfig, run_text_sim  # noqa: PLC0415 - imports MuJoCo
+
+        cfg = TextSimConfig(policy=policy, seed=seed, video=video, report=report, progress=progress)
+        if not blend:
+            cfg = replace(cfg, run=replace(cfg.run, blend_frames=None))
+        return run_text_sim(program, cfg, self.encoder.embed, detect_gestures, self.text_embedding())
+
+    def composed_transition(self, program: Program, blend_frames: int | None, seed: int = 0) -> float | None:
+        """The transition score of the composed plan alone (perfect tracking), blended or naive (None)."""
+        from controller.planner.runtime import Planner  # noqa: PLC0415
+        from controller.text.job import composed_transition_score  # noqa: PLC0415
+
+        if self._planner is None:
+            self._planner = Planner.load()
+            self._planner.warm_up()
+        return composed_transition_score(program, self._planner.plan, blend_frames, seed, self.text_embedding())
