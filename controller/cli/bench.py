@@ -92,9 +92,7 @@ def _inbetween(args: argparse.Namespace) -> int:
     )  # fmt: skip
     report = bi.run_inbetween_bench(cfg)
     print(bi.format_table(report))
-    if args.report is not None:
-        write_report(report, args.report)
-        print(f"report: {args.report}")
+    _save(report, args.report)
     return 0
 
 
@@ -114,9 +112,7 @@ def _text(args: argparse.Namespace) -> int:
         progress=lambda line: print(line, file=sys.stderr, flush=True),
     )
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
-    if args.report is not None:
-        write_report(report, args.report)
-        print(f"report: {args.report}")
+    _save(report, args.report)
     return 0
 
 
@@ -129,10 +125,15 @@ def _caption(args: argparse.Namespace) -> int:
     )  # fmt: skip
     report = bc.run_caption_bench(cfg)
     print(bc.format_table(report))
-    if args.report is not None:
-        write_report(report, args.report)
-        print(f"report: {args.report}")
+    _save(report, args.report)
     return 0
+
+
+def _save(report: dict[str, Any], path: Path | None) -> None:
+    """Write the JSON report where asked and say where."""
+    if path is not None:
+        write_report(report, path)
+        print(f"report: {path}")
 
 
 def _emit(report: dict[str, Any], path: Path | None) -> None:
