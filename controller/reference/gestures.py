@@ -91,6 +91,7 @@ class GestureLibrary:
         self.base = np.asarray(cfg.base, dtype=np.float64)
         arm = np.zeros(g1.NUM_JOINTS, dtype=bool)
         arm[g1.joint_indices(g1.ARM_JOINTS)] = True
+        self._arms = arm
         self.styles: dict[str, GestureStyle] = {}
         for index, name in enumerate(GESTURES):
             if index == 0:
@@ -133,13 +134,17 @@ class GestureLibrary:
             held |= style.arms
         return q, held
 
-    def keyframes(self, gestures: Sequence[Gesture], first_frame_time: float, frames: int) -> tuple[Keyframe, ...]:
+    def keyframes(self, gestures: Sequence[Gesture], first_frame_time: float, frames: int, hold_rest: bool = False) -> tuple[Keyframe, ...]:
         """Arm keyframes for a plan of `frames` frames whose frame k is at run time `first_frame_time + k / FPS`.
 
         On the last frame and every `spacing` frames back from it (the densest spacing of the
         gestures in play), none on frame 0 (the plan leaves the context smoothly); root free.
         Once every gesture has blended out, one more keyframe puts the arms on the base pose
         (the plan holds it from there) and the rest of the plan is the planner's.
+
+        `hold_rest`: while gestures shape the arms, the arm joints none of them moves are held
+        on the base pose ("raise your right arm" leaves the left one down: see
+        `SmartLocomotion.hold_free_arms`).
         """
         if not gestures:
             return ()
@@ -148,6 +153,8 @@ class GestureLibrary:
         for frame in reversed(range(frames - 1, 0, -spacing)):
             t = first_frame_time + frame / FPS
             q, held = self.arm_angles(gestures, t)
+            if hold_rest:
+                held = held | self._arms
             if held.any():
                 qpos = np.array(g1.standing_qpos())
                 qpos[g1.QPOS_JOINTS] = q

@@ -12,10 +12,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from controller.inputs.base import ZERO, VelocityCommand
-from controller.planner.request import FPS, PlanRequest, target_root
+from controller.planner.request import FPS, Keyframe, PlanRequest, target_root
 from controller.reference.gestures import NONE_NAMES, Gesture, GestureConfig, GestureLibrary, merged
 from controller.reference.root_spring import RootState, RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
+from hw import g1
 from hw.errors import ConfigError
 from hw.types import FloatArray
 
@@ -25,6 +28,10 @@ class LocomotionConfig:
     plan_frames: int = 44  # 1.47 s at 30 fps: a multiple of 4 in 24-64 (the planner contract)
     spring: SpringConfig = field(default_factory=SpringConfig)
     gestures: GestureConfig = field(default_factory=GestureConfig)
+    # The pelvis is back upright at the standing height by this plan frame (None: left to the planner). Each plan
+    # continues the previous one's frames, and nothing else holds the root's tilt: on a text plan's "turn around"
+    # it drifted from 3 to 177 degrees over 10 s, the root height to 1e13 m.
+    upright_frame: int | None = 4
 
     def __post_init__(self) -> None:
         if self.plan_frames % 4 or not 24 <= self.plan_frames <= 64:
@@ -44,6 +51,11 @@ class SmartLocomotion:
         self.library = GestureLibrary(cfg.gestures)
         self.gestures: tuple[Gesture, ...] = ()  # the gesture in force (end inf) last, after those still blending out
         self.text_embedding: FloatArray | None = None  # the planner's text conditioning (a text plan's clause), None: none
+        # While a gesture is in force, the arm joints it does not move stay on the base pose ("raise your right
+        # arm": the left one stays down). Off, the planner swings them as it likes: the shipped planner, half of
+        # whose training windows are dance capture, raised the left arm too on "raise your right arm" in a text
+        # plan. Not held without a gesture: arms held through a turn in place made its plans diverge.
+        self.hold_free_arms = False
 
     @property
     def gesture(self) -> Gesture | None:
@@ -101,6 +113,17 @@ class SmartLocomotion:
             acceleration=turned(previous.acceleration), yaw_acceleration=previous.yaw_acceleration,
         )  # fmt: skip
 
+    def _with_upright(self, arms: tuple[Keyframe, ...], target: Keyframe) -> tuple[Keyframe, ...]:
+        """`arms` with the pelvis upright at the standing height on `upright_frame` (merged with an arm keyframe there)."""
+        frame = self.cfg.upright_frame
+        if frame is None or frame >= target.frame:
+            return arms
+        upright = Keyframe(frame, target.qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=False, root_height=True)
+        same = [k for k in arms if k.frame == frame]
+        if same:
+            upright = merged(upright, same[0])
+        return tuple(sorted((*(k for k in arms if k.frame != frame), upright), key=lambda k: k.frame))
+
     def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         """The plan that continues `context` towards where the spring takes the root under the command."""
         state = self._continued(root_state_from_frames(context, FPS), splice_time)
@@ -111,9 +134,10 @@ class SmartLocomotion:
         target = target_root(last, float(x), float(y), float(path.headings[last]))
         first = splice_time + 1.0 / FPS  # plan frame k is at first + k / FPS
         self.gestures = tuple(g for g in self.gestures if g.alive(first, self.cfg.gestures.blend_s))
-        arms = self.library.keyframes(self.gestures, first, self.cfg.plan_frames)
+        arms = self.library.keyframes(self.gestures, first, self.cfg.plan_frames, self.hold_free_arms)
         if arms and arms[-1].frame == last:
             target, arms = merged(target, arms[-1]), arms[:-1]
+        arms = self._with_upright(arms, target)
         self._count += 1  # every plan its own seed: reproducible for a run seed, varied over the run
         keyframes = (*arms, target)
         return PlanRequest(

@@ -49,6 +49,10 @@ class SchedulerConfig:
     crossfade_frames: int = 3  # frames of the new plan blended into the old one at the splice
     simulated_latency_s: float = 0.02  # simulated clock: a plan is ready this long after its request
     stall_timeout_s: float = 1.0  # wall seconds a plan may take before it counts as failed
+    # A plan whose pelvis tilts further than this or leaves this height range is a failure, not a reference:
+    # a planner out of its training distribution once tilted its plans past 90 degrees, the root to 1e13 m.
+    max_root_tilt_deg: float = 45.0
+    root_height_range_m: tuple[float, float] = (0.4, 1.2)
 
     def __post_init__(self) -> None:
         for name in ("period_s", "lookahead_s", "stall_timeout_s"):
@@ -61,6 +65,12 @@ class SchedulerConfig:
             )
         if self.crossfade_frames < 0:
             raise ConfigError(f"scheduler crossfade_frames must be >= 0, got {self.crossfade_frames}")
+        low, high = self.root_height_range_m
+        if not 0 < self.max_root_tilt_deg <= 180 or not 0 <= low < high:
+            raise ConfigError(
+                f"scheduler max_root_tilt_deg must be in (0, 180] and root_height_range_m (low, high) with 0 <= low < high, "
+                f"got {self.max_root_tilt_deg} and {self.root_height_range_m}"
+            )
 
 
 @dataclass
@@ -196,6 +206,10 @@ class ReplanScheduler:
         if not np.isfinite(frames).all():
             self._fail("the planner returned NaN or infinite values")
             return None
+        implausible = implausible_root(frames, self.cfg.max_root_tilt_deg, self.cfg.root_height_range_m)
+        if implausible is not None:
+            self._fail(f"the planner returned an implausible root: {implausible}")
+            return None
         if self._limits is not None:
             joints = frames[:, g1.QPOS_JOINTS]
             clamped = np.clip(joints, self._limits[0], self._limits[1])
@@ -215,3 +229,16 @@ class ReplanScheduler:
 
     def close(self) -> None:
         self._executor.shutdown(wait=False, cancel_futures=True)
+
+
+def implausible_root(frames: FloatArray, max_tilt_deg: float, height_range: tuple[float, float]) -> str | None:
+    """What is wrong with the root of plan `frames` (qpos [N, 36]): tilted too far or out of the height range; None when fine."""
+    q = frames[:, g1.QPOS_ROOT_QUAT] / np.linalg.norm(frames[:, g1.QPOS_ROOT_QUAT], axis=1, keepdims=True)
+    up = 1.0 - 2.0 * (q[:, 1] ** 2 + q[:, 2] ** 2)  # the body z axis's world z component: cos(tilt)
+    tilt = float(np.degrees(np.arccos(np.clip(up.min(), -1.0, 1.0))))
+    if tilt > max_tilt_deg:
+        return f"pelvis tilted {tilt:.0f} degrees (at most {max_tilt_deg:g})"
+    z = frames[:, 2]
+    if z.min() < height_range[0] or z.max() > height_range[1]:
+        return f"pelvis height {z.min():.2f}-{z.max():.2f} m (allowed {height_range[0]:g}-{height_range[1]:g})"
+    return None

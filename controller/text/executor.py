@@ -19,6 +19,8 @@ the gesture library):
   (Text2BFM-Compose's overlap). With `blend_frames=None` the clauses are concatenated
   naively (planned from a standing pose, no blend): the baseline blending is judged against.
 - The clause's text conditions the planner's text slot, when the planner was trained so.
+- Arms no gesture of the clause moves are held down (`hold_free_arms`): an instruction that
+  names no arm gets no arm motion beyond what the walk needs.
 
 A clause ends when its follower has settled on the last target and its minimum duration
 has passed, or, failing that, after a timeout (reported). Everything measured per clause
@@ -67,6 +69,7 @@ class TextRunConfig:
     blend_frames: int | None = 8  # overlap of two clauses' plans (frames at 30 fps); None: naive concatenation
     timeout_factor: float = 1.5  # a clause may take this many times its estimate, plus the margin, before it is given up
     timeout_margin_s: float = 5.0
+    hold_free_arms: bool = True  # arms no clause gesture moves stay down (see `SmartLocomotion.hold_free_arms`)
     waypoints: WaypointConfig = field(default_factory=_clause_waypoints)
 
     def __post_init__(self) -> None:
@@ -163,6 +166,7 @@ class TextReference(ReferenceSource):
         return "done" if self.finished_at is not None else ""
 
     def start(self, state: RobotState) -> None:
+        self.planned.locomotion.hold_free_arms = self.cfg.hold_free_arms
         self.planned.start(state)
         if self.records:  # a restart after a fall: the clause running goes on from where the robot is
             return

@@ -45,6 +45,10 @@ _GESTURE_PHRASES = {
 }
 MIN_DISTANCE_M = 0.2  # a segment that moved less than this stood (a stop carries the robot a few centimetres)
 MIN_TURN_DEG = 20.0  # ... or turned less than this did not turn
+# A walk whose smaller part is at least this share of the larger is diagonal: both parts are said. Said as
+# one direction, "half a meter forward and half a meter to the left" became "step to the left 0.5 meters",
+# which matched a later clause better than its own.
+DIAGONAL_RATIO = 0.5
 
 
 def motion_caption(forward_m: float, left_m: float, heading_deg: float, gestures: Sequence[str]) -> str:
@@ -52,17 +56,24 @@ def motion_caption(forward_m: float, left_m: float, heading_deg: float, gestures
     parts = []
     distance = math.hypot(forward_m, left_m)
     if distance >= MIN_DISTANCE_M:
-        meters = max(0.5, round(distance * 2.0) / 2.0)
-        if abs(forward_m) >= abs(left_m):
-            parts.append(f"walk {'forward' if forward_m > 0 else 'backward'} {meters:.1f} meters")
+        forward, sideways = abs(forward_m), abs(left_m)
+        if min(forward, sideways) >= max(MIN_DISTANCE_M, DIAGONAL_RATIO * max(forward, sideways)):  # both parts, each its own
+            parts.append(f"walk {'forward' if forward_m > 0 else 'backward'} {_half_meters(forward):.1f} meters")
+            parts.append(f"step to the {'left' if left_m > 0 else 'right'} {_half_meters(sideways):.1f} meters")
+        elif forward >= sideways:
+            parts.append(f"walk {'forward' if forward_m > 0 else 'backward'} {_half_meters(distance):.1f} meters")
         else:
-            parts.append(f"step to the {'left' if left_m > 0 else 'right'} {meters:.1f} meters")
+            parts.append(f"step to the {'left' if left_m > 0 else 'right'} {_half_meters(distance):.1f} meters")
     if abs(heading_deg) >= MIN_TURN_DEG:
         degrees = max(45, round(abs(heading_deg) / 45.0) * 45)
         parts.append(f"turn {'left' if heading_deg > 0 else 'right'} {degrees} degrees")
     base = " and ".join(parts) or "stand still"
     edits = [_GESTURE_PHRASES[g] for g in gestures if g in _GESTURE_PHRASES]
     return f"{base} and {' and '.join(edits)}" if edits else base
+
+
+def _half_meters(distance: float) -> float:
+    return max(0.5, round(distance * 2.0) / 2.0)
 
 
 def clause_caption(clause: Clause) -> str:

@@ -101,6 +101,25 @@ def test_no_gesture_no_keyframes_and_an_unknown_name_lists_the_valid_ones() -> N
         library.style("salute")
 
 
+def test_holding_the_free_arms_keeps_the_arm_joints_the_gesture_does_not_move_on_the_base_pose() -> None:
+    library = GestureLibrary()
+    first = 3.0
+    assert library.keyframes([], first, 44, hold_rest=True) == ()  # no gesture: the arms are the planner's
+    raised = library.keyframes([Gesture("raise_right", start=0.0)], first, 44, hold_rest=True)
+    right = library.style("raise_right").arms
+    assert [k.frame for k in raised] == list(range(43, 0, -4))[::-1]
+    for k in raised:  # the right arm does the gesture, the left one stays down
+        np.testing.assert_array_equal(k.joints, ARMS)
+        np.testing.assert_allclose(k.qpos[g1.QPOS_JOINTS][ARMS & ~right], BASE[ARMS & ~right], atol=1e-12)
+        expected = player_angles("raise_right", 0.0, first + k.frame / FPS)
+        np.testing.assert_allclose(k.qpos[g1.QPOS_JOINTS][right], expected[right], atol=1e-12)
+    locomotion = SmartLocomotion()
+    locomotion.hold_free_arms = True
+    locomotion.set_gesture("raise_right", 0.0)
+    held = locomotion.request(CONTEXT, 1.0).keyframes
+    assert held[-1].root and np.array_equal(held[-1].joints, ARMS)  # the last arm keyframe merged into the root target
+
+
 def test_the_gesture_keeps_its_start_while_asked_for_and_blends_out_after_it_ends() -> None:
     locomotion = SmartLocomotion()
     locomotion.set_gesture("wave", 1.0)
@@ -144,7 +163,7 @@ def test_the_shipped_planner_puts_the_arms_on_the_keyframes(name: str) -> None:
     request = locomotion.request(CONTEXT, 0.2)  # mid blend: the angles change along the plan
     assert isinstance(request, PlanRequest) and len(request.validated().keyframes) > 5
     plan = planner.plan(request)
-    for k in request.keyframes:
+    for k in (k for k in request.keyframes if k.joints.any()):
         joints = plan.qpos[k.frame, g1.QPOS_JOINTS][k.joints]
         assert np.abs(joints - k.qpos[g1.QPOS_JOINTS][k.joints]).max() <= 0.05, k.frame
 

@@ -68,7 +68,7 @@ def test_the_same_seed_gives_the_same_reference_whatever_the_machine(planner: Pl
     second.close()
 
 
-@pytest.mark.parametrize("drill", ["raises", "nan", "wrong_shape"])
+@pytest.mark.parametrize("drill", ["raises", "nan", "wrong_shape", "tilted", "sunk"])
 def test_a_failing_planner_is_counted_and_the_reference_holds_a_pose(planner: Planner, drill: str) -> None:
     calls = {"n": 0}
 
@@ -81,6 +81,13 @@ def test_a_failing_planner_is_counted_and_the_reference_holds_a_pose(planner: Pl
             raise RuntimeError("injected planner fault")
         if drill == "nan":
             return Plan(np.full_like(good.qpos, np.nan), good.contacts, good.latency_ms)
+        if drill in ("tilted", "sunk"):
+            bad = np.array(good.qpos)
+            if drill == "tilted":  # on its side: 90 degrees about x
+                bad[:, g1.QPOS_ROOT_QUAT] = (np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0)
+            else:
+                bad[:, 2] = -3.0
+            return Plan(bad, good.contacts, good.latency_ms)
         return Plan(good.qpos[:, :30], good.contacts, good.latency_ms)
 
     scheduler, buffer = make(plan)
@@ -88,6 +95,8 @@ def test_a_failing_planner_is_counted_and_the_reference_holds_a_pose(planner: Pl
     c = scheduler.counters
     assert c.replans == 5 and c.planner_failures >= 20
     assert scheduler.last_failure is not None
+    if drill in ("tilted", "sunk"):
+        assert ("tilted 90 degrees" if drill == "tilted" else "height -3.00") in scheduler.last_failure
     end = buffer.sample(3.0)
     assert end.held and np.isfinite(end.qpos).all()  # the last plan ran out: its last pose, held
     scheduler.close()
@@ -145,6 +154,8 @@ def test_config_mistakes_name_the_field() -> None:
         SchedulerConfig(period_s=0.0)
     with pytest.raises(ConfigError, match="always late"):
         SchedulerConfig(lookahead_s=0.05, simulated_latency_s=0.06)
+    with pytest.raises(ConfigError, match="root_height_range_m"):
+        SchedulerConfig(root_height_range_m=(1.0, 0.5))
 
 
 def test_a_dead_worker_is_counted_and_replaced(planner: Planner) -> None:

@@ -25,6 +25,8 @@ def test_motion_caption_describes_what_was_measured() -> None:
     assert motion_caption(0.02, -0.03, -86.0, ()) == "turn right 90 degrees"
     assert motion_caption(0.0, 0.0, 3.0, ("wave_both",)) == "stand still and wave both hands"
     assert motion_caption(0.05, 0.0, 0.0, ()) == "stand still"  # a stop's carry is not a walk
+    assert motion_caption(0.46, 0.48, 0.0, ()) == "walk forward 0.5 meters and step to the left 0.5 meters"  # diagonal
+    assert motion_caption(1.9, -0.3, 0.0, ()) == "walk forward 2.0 meters"  # a drift to one side is not a diagonal
 
 
 def test_clause_caption_uses_the_resolved_goal() -> None:
