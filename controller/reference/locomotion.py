@@ -15,10 +15,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from controller.inputs.base import ZERO, VelocityCommand
-from controller.planner.request import FPS, Keyframe, PlanRequest, target_root
+from controller.planner.request import FPS, PlanRequest, target_root
 from controller.reference.gestures import NONE_NAMES, Gesture, GestureConfig, GestureLibrary, merged
 from controller.reference.root_spring import RootState, RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory
-from hw import g1
+from hw import g1, quat
 from hw.errors import ConfigError
 from hw.types import FloatArray
 
@@ -28,10 +28,10 @@ class LocomotionConfig:
     plan_frames: int = 44  # 1.47 s at 30 fps: a multiple of 4 in 24-64 (the planner contract)
     spring: SpringConfig = field(default_factory=SpringConfig)
     gestures: GestureConfig = field(default_factory=GestureConfig)
-    # The pelvis is back upright at the standing height by this plan frame (None: left to the planner). Each plan
-    # continues the previous one's frames, and nothing else holds the root's tilt: on a text plan's "turn around"
-    # it drifted from 3 to 177 degrees over 10 s, the root height to 1e13 m.
-    upright_frame: int | None = 4
+    # Plans continue a context with its pelvis levelled (heading, height and joints kept). Each plan continues
+    # the previous one's frames and nothing else holds the tilt: on `random_commands` the executed plans' pelvis
+    # tilt reached 80 degrees, on a text plan's "turn around" 177 degrees and the root height 1e13 m.
+    level_context: bool = True
 
     def __post_init__(self) -> None:
         if self.plan_frames % 4 or not 24 <= self.plan_frames <= 64:
@@ -113,19 +113,10 @@ class SmartLocomotion:
             acceleration=turned(previous.acceleration), yaw_acceleration=previous.yaw_acceleration,
         )  # fmt: skip
 
-    def _with_upright(self, arms: tuple[Keyframe, ...], target: Keyframe) -> tuple[Keyframe, ...]:
-        """`arms` with the pelvis upright at the standing height on `upright_frame` (merged with an arm keyframe there)."""
-        frame = self.cfg.upright_frame
-        if frame is None or frame >= target.frame:
-            return arms
-        upright = Keyframe(frame, target.qpos, joints=np.zeros(g1.NUM_JOINTS, dtype=bool), root=False, root_height=True)
-        same = [k for k in arms if k.frame == frame]
-        if same:
-            upright = merged(upright, same[0])
-        return tuple(sorted((*(k for k in arms if k.frame != frame), upright), key=lambda k: k.frame))
-
     def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         """The plan that continues `context` towards where the spring takes the root under the command."""
+        if self.cfg.level_context:
+            context = levelled(context)
         state = self._continued(root_state_from_frames(context, FPS), splice_time)
         path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
         self.path, self.path_start = path, splice_time
@@ -137,7 +128,6 @@ class SmartLocomotion:
         arms = self.library.keyframes(self.gestures, first, self.cfg.plan_frames, self.hold_free_arms)
         if arms and arms[-1].frame == last:
             target, arms = merged(target, arms[-1]), arms[:-1]
-        arms = self._with_upright(arms, target)
         self._count += 1  # every plan its own seed: reproducible for a run seed, varied over the run
         keyframes = (*arms, target)
         return PlanRequest(
@@ -147,3 +137,10 @@ class SmartLocomotion:
             text_embedding=self.text_embedding,
             seed=self._seed * 100_003 + self._count,
         )
+
+
+def levelled(frames: FloatArray) -> FloatArray:
+    """`frames` (qpos [K, 36]) with each root orientation reduced to its heading: the pelvis level, all else kept."""
+    out = np.array(frames, dtype=np.float64)
+    out[:, g1.QPOS_ROOT_QUAT] = quat.from_yaw(quat.heading(out[:, g1.QPOS_ROOT_QUAT]))
+    return out

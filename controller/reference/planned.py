@@ -93,6 +93,8 @@ class PlannedReference(ReferenceSource):
         """Hold the robot's measured pose until the first plan arrives."""
         qpos = np.zeros(g1.QPOS_SIZE)
         qpos[g1.QPOS_ROOT_POS] = state.base_pos
+        if not state.has_base_position:  # nothing estimates it (it reads zero): the plan stands at the standing height
+            qpos[2] = g1.STANDING_PELVIS_HEIGHT
         qpos[g1.QPOS_ROOT_QUAT] = state.base_quat
         qpos[g1.QPOS_JOINTS] = state.joint_pos
         self.buffer.reset(qpos, state.time)

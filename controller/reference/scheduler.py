@@ -49,10 +49,12 @@ class SchedulerConfig:
     crossfade_frames: int = 3  # frames of the new plan blended into the old one at the splice
     simulated_latency_s: float = 0.02  # simulated clock: a plan is ready this long after its request
     stall_timeout_s: float = 1.0  # wall seconds a plan may take before it counts as failed
-    # A plan whose pelvis tilts further than this or leaves this height range is a failure, not a reference:
-    # a planner out of its training distribution once tilted its plans past 90 degrees, the root to 1e13 m.
-    max_root_tilt_deg: float = 45.0
-    root_height_range_m: tuple[float, float] = (0.4, 1.2)
+    # A plan whose pelvis tilts further than this, or whose height moves more than this within the plan, is a
+    # failure, not a reference: before contexts were levelled (`LocomotionConfig.level_context`) a drifting
+    # context took the shipped planner's plans to 177 degrees and the root to 1e13 m. Sound plans on
+    # `random_commands` (120 s, seed 1): at most 45 degrees and 0.23 m, mid-plan; their first 6 frames 18 degrees.
+    max_root_tilt_deg: float = 90.0
+    max_root_height_change_m: float = 0.4
 
     def __post_init__(self) -> None:
         for name in ("period_s", "lookahead_s", "stall_timeout_s"):
@@ -65,11 +67,10 @@ class SchedulerConfig:
             )
         if self.crossfade_frames < 0:
             raise ConfigError(f"scheduler crossfade_frames must be >= 0, got {self.crossfade_frames}")
-        low, high = self.root_height_range_m
-        if not 0 < self.max_root_tilt_deg <= 180 or not 0 <= low < high:
+        if not 0 < self.max_root_tilt_deg <= 180 or not self.max_root_height_change_m > 0:
             raise ConfigError(
-                f"scheduler max_root_tilt_deg must be in (0, 180] and root_height_range_m (low, high) with 0 <= low < high, "
-                f"got {self.max_root_tilt_deg} and {self.root_height_range_m}"
+                f"scheduler max_root_tilt_deg must be in (0, 180] and max_root_height_change_m positive, "
+                f"got {self.max_root_tilt_deg} and {self.max_root_height_change_m}"
             )
 
 
@@ -206,7 +207,7 @@ class ReplanScheduler:
         if not np.isfinite(frames).all():
             self._fail("the planner returned NaN or infinite values")
             return None
-        implausible = implausible_root(frames, self.cfg.max_root_tilt_deg, self.cfg.root_height_range_m)
+        implausible = implausible_root(frames, self.cfg.max_root_tilt_deg, self.cfg.max_root_height_change_m)
         if implausible is not None:
             self._fail(f"the planner returned an implausible root: {implausible}")
             return None
@@ -231,14 +232,17 @@ class ReplanScheduler:
         self._executor.shutdown(wait=False, cancel_futures=True)
 
 
-def implausible_root(frames: FloatArray, max_tilt_deg: float, height_range: tuple[float, float]) -> str | None:
-    """What is wrong with the root of plan `frames` (qpos [N, 36]): tilted too far or out of the height range; None when fine."""
+def implausible_root(frames: FloatArray, max_tilt_deg: float, max_height_change_m: float) -> str | None:
+    """What is wrong with the root of plan `frames` (qpos [N, 36]): tilted too far, or rising or sinking too much; None when fine.
+
+    The height is judged by its change within the plan: without a base position estimate (hardware) it is the plan's own.
+    """
     q = frames[:, g1.QPOS_ROOT_QUAT] / np.linalg.norm(frames[:, g1.QPOS_ROOT_QUAT], axis=1, keepdims=True)
     up = 1.0 - 2.0 * (q[:, 1] ** 2 + q[:, 2] ** 2)  # the body z axis's world z component: cos(tilt)
     tilt = float(np.degrees(np.arccos(np.clip(up.min(), -1.0, 1.0))))
     if tilt > max_tilt_deg:
         return f"pelvis tilted {tilt:.0f} degrees (at most {max_tilt_deg:g})"
-    z = frames[:, 2]
-    if z.min() < height_range[0] or z.max() > height_range[1]:
-        return f"pelvis height {z.min():.2f}-{z.max():.2f} m (allowed {height_range[0]:g}-{height_range[1]:g})"
+    change = float(np.ptp(frames[:, 2]))
+    if change > max_height_change_m:
+        return f"pelvis height moved {change:.2f} m within the plan (at most {max_height_change_m:g})"
     return None

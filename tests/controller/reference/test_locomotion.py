@@ -1,4 +1,4 @@
-"""Smart locomotion requests: the pelvis brought back upright early in every plan, so replanning cannot drift it."""
+"""Smart locomotion requests: every plan continues a levelled context, so replanning cannot drift the pelvis over."""
 
 from __future__ import annotations
 
@@ -7,41 +7,41 @@ import pytest
 
 from controller.inputs.base import VelocityCommand
 from controller.planner.runtime import Planner
-from controller.reference.locomotion import LocomotionConfig, SmartLocomotion
+from controller.reference.locomotion import LocomotionConfig, SmartLocomotion, levelled
 from controller.reference.scheduler import implausible_root
 from hw import g1, quat
 from hw.shipped import model_dir
 
 
-def tilted_context(degrees: float) -> np.ndarray:
-    frame = np.array(g1.standing_qpos())
-    frame[g1.QPOS_ROOT_QUAT] = quat.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(degrees))
-    return np.tile(frame, (4, 1))
+def tilted_context(degrees: float, heading: float = 0.7) -> np.ndarray:
+    frames = np.tile(np.array(g1.standing_qpos()), (4, 1))
+    tilt = quat.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(degrees))
+    frames[:, g1.QPOS_ROOT_QUAT] = quat.multiply(quat.from_yaw(np.full(4, heading)), np.tile(tilt, (4, 1)))
+    frames[:, 0] = np.arange(4) * 0.02  # walking forward
+    return frames
 
 
-def test_every_request_holds_the_pelvis_upright_at_the_standing_height_on_the_upright_frame() -> None:
+def test_levelling_keeps_heading_position_and_joints_and_removes_the_tilt() -> None:
+    context = tilted_context(25.0)
+    level = levelled(context)
+    assert implausible_root(context, 20.0, 1.0) is not None and implausible_root(level, 1e-6, 1.0) is None
+    np.testing.assert_allclose(quat.heading(level[:, g1.QPOS_ROOT_QUAT]), quat.heading(context[:, g1.QPOS_ROOT_QUAT]), atol=1e-12)
+    np.testing.assert_array_equal(level[:, :3], context[:, :3])
+    np.testing.assert_array_equal(level[:, g1.QPOS_JOINTS], context[:, g1.QPOS_JOINTS])
+
+
+def test_requests_continue_a_levelled_context_unless_told_not_to() -> None:
     locomotion = SmartLocomotion()
     locomotion.command = VelocityCommand(vx=0.4, yaw_rate=0.5)
-    upright = [k for k in locomotion.request(tilted_context(10.0), 1.0).keyframes if k.frame == 4]
-    assert len(upright) == 1 and upright[0].root_height and not upright[0].root and not upright[0].joints.any()
-    assert upright[0].qpos[2] == g1.STANDING_PELVIS_HEIGHT
-    assert implausible_root(upright[0].qpos[None], 0.5, (0.7, 0.9)) is None  # level
-    off = SmartLocomotion(LocomotionConfig(upright_frame=None))
-    assert [k.frame for k in off.request(tilted_context(10.0), 1.0).keyframes] == [43]
-
-
-def test_a_wave_keyframe_on_the_upright_frame_merges_into_it() -> None:
-    locomotion = SmartLocomotion(LocomotionConfig(upright_frame=5))  # the wave's keyframes: 43, 41, ..., 5, 3
-    locomotion.set_gesture("wave", 0.0)
-    keyframes = locomotion.request(tilted_context(0.0), 1.0).keyframes
-    frames = [k.frame for k in keyframes]
-    assert len(set(frames)) == len(frames) and frames == sorted(frames)
-    five = keyframes[frames.index(5)]
-    assert five.root_height and five.joints.any()
+    context = tilted_context(25.0)
+    np.testing.assert_allclose(locomotion.request(context, 1.0).context, levelled(context))
+    raw = SmartLocomotion(LocomotionConfig(level_context=False))
+    np.testing.assert_array_equal(raw.request(context, 1.0).context, context)
 
 
 @pytest.mark.skipif(not (model_dir("planner") / "planner.onnx").is_file(), reason="no shipped planner model")
-def test_the_shipped_planner_levels_a_tilted_context_by_the_upright_frame() -> None:
-    plan = Planner.load().plan(SmartLocomotion().request(tilted_context(12.0), 1.0))
-    assert implausible_root(plan.qpos[:1], 8.0, (0.5, 1.1)) is not None  # it leaves the context tilted
-    assert implausible_root(plan.qpos[4:5], 0.5, (0.77, 0.79)) is None  # level at the standing height on frame 4
+def test_the_shipped_planner_starts_level_from_a_tilted_context() -> None:
+    locomotion = SmartLocomotion()
+    locomotion.command = VelocityCommand(vx=0.4)
+    plan = Planner.load().plan(locomotion.request(tilted_context(30.0), 1.0))
+    assert implausible_root(plan.qpos[:6], 10.0, 0.1) is None  # the frames the loop executes stay near level
