@@ -5,8 +5,8 @@ prompt marked `refuse` passes when it is refused. Otherwise it runs in simulatio
 planner in the loop, blended joins) and passes when the robot did not fall, the number of
 clauses is the expected one, the total displacement and heading change measured in the
 start frame are within the tolerances, and every expected gesture was detected in the
-executed arm motion. Then the same program runs kinematically (perfect tracking, no
-physics) twice, with blended joins and with naive concatenation, so that the two
+executed arm motion. Then the same program runs kinematically (an ideal robot whose
+root moves as commanded, no physics) twice, with blended joins and with naive concatenation, so that the two
 `transition_score`s compare the composition alone.
 
 Reported: per prompt pass/fail with the reason and the figures; the success rate; the

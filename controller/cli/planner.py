@@ -1,7 +1,7 @@
 """`g1ctl train planner` and `g1ctl viz plan`.
 
 g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N] [--data-weights 1,1,2]
-                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12] [--free-share 0.1]
+                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12] [--free-share 0]
 g1ctl viz plan --out plan.png [--model DIR] [--data DATASET] [--seeds 4] [--length 44]
 g1ctl viz plan --out plan.mp4 --target 1.2,0.4,0.8
 """
@@ -33,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     planner.add_argument("--no-mirror", action="store_true", help="do not add left-right mirrored copies of imported clips")
     planner.add_argument("--text-dropout", type=float, default=None, help="share of windows without text (1: no text at all)")
     planner.add_argument("--text-variants", type=int, default=None, help="paraphrases per caption, the caption included")
-    planner.add_argument("--free-share", type=float, default=None, help="share of windows with no constraint at all (default 0.1)")
+    planner.add_argument("--free-share", type=float, default=None, help="share of windows with no constraint at all (default 0)")
     planner.add_argument("--no-progress", action="store_true")
 
     viz = sub.add_parser("viz", help="pictures and videos of plans")

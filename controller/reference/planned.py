@@ -58,13 +58,9 @@ class PlannedReference(ReferenceSource):
         joint_limits: tuple[FloatArray, FloatArray] | None = None,
         seed: int = 0,
         follower: WaypointFollower | None = None,  # waypoints mode: the command comes from it
-        perfect_tracking: bool = False,  # the robot's state is the plan itself (a plan composed on paper)
     ) -> None:
         self.cfg = cfg
         self.follower = follower
-        # With perfect tracking the follower's closed-loop command (floors, stop band, settling) is the plan's own:
-        # the open-loop `plan_command` exists because a real robot and its plan drift apart.
-        self.perfect_tracking = perfect_tracking
         self.buffer = ReferenceBuffer()
         self.locomotion = SmartLocomotion(cfg.locomotion, seed)
         self.scheduler = ReplanScheduler(plan, self._request, self.buffer, cfg.scheduler, simulated_clock, joint_limits)
@@ -115,7 +111,7 @@ class PlannedReference(ReferenceSource):
         planned = velocity  # what the planner is asked for
         if self.follower is not None and not hold:  # the legs walk the robot to the target, the planner walks the plan there
             velocity = self.follower.command(state)
-            planned = velocity if self.perfect_tracking else self.follower.plan_command(now.qpos, self.cfg.locomotion.spring)
+            planned = self.follower.plan_command(now.qpos, self.cfg.locomotion.spring)
         changed = self._last_command is None or _differs(planned, self._last_command, self.cfg.command_change)
         changed = self.locomotion.set_gesture(gesture, t) or changed
         if changed:

@@ -79,13 +79,13 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
 def composed_transition_score(
     program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None
 ) -> float | None:
-    """The transition score of `program` composed on paper (perfect tracking): blended joins, or naive ones with None."""
+    """The transition score of `program` composed on paper (an ideal robot): blended joins, or naive ones with None."""
     from controller.text.kinematic import run_kinematic  # noqa: PLC0415
     from controller.text.metrics import transition_score  # noqa: PLC0415
     from controller.text.report import reference_with_boundaries  # noqa: PLC0415
 
     cfg = replace(TextRunConfig(), blend_frames=blend_frames)
-    reference = TextReference(program, PlannedReference(plan, seed=seed, perfect_tracking=True), cfg, embed=text_embedding)
+    reference = TextReference(program, PlannedReference(plan, seed=seed), cfg, embed=text_embedding)
     try:
         run_kinematic(reference, max_seconds=budget_seconds(program, reference.cfg))
     finally:

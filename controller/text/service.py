@@ -66,7 +66,7 @@ class TextPlanner:
         return run_text_sim(program, cfg, self.encoder.embed, detect_gestures, self.text_embedding())
 
     def composed_transition(self, program: Program, blend_frames: int | None, seed: int = 0) -> float | None:
-        """The transition score of the composed plan alone (perfect tracking), blended or naive (None)."""
+        """The transition score of the composed plan alone (an ideal robot: the root moves as commanded), blended or naive (None)."""
         from controller.planner.runtime import Planner  # noqa: PLC0415
         from controller.text.job import composed_transition_score  # noqa: PLC0415
 

@@ -60,7 +60,7 @@ class WindowSampler:
         min_frames: int = CONTEXT_FRAMES + ALLOWED_LENGTHS[0],
         group_weights: Sequence[float] | None = None,
         text: TextTable | None = None,
-        free_share: float = 0.1,  # windows with no constraint at all: the context (and the text) alone decide the motion
+        free_share: float = 0.0,  # windows with no constraint at all: the context (and the text) alone decide the motion
     ) -> None:
         if group_weights is not None and (len(group_weights) != len(groups) or min(group_weights, default=0.0) <= 0):
             raise ValueError(f"group_weights must be {len(groups)} positive numbers, one per group, got {list(group_weights)}")
@@ -116,7 +116,7 @@ class WindowSampler:
         return WindowBatch(cond, target, curve, window, truth, length, tuple(captions), has_text)
 
 
-def random_constraints(rng: np.random.Generator, length: NDArray[np.int64], free_share: float = 0.1) -> NDArray[np.bool_]:
+def random_constraints(rng: np.random.Generator, length: NDArray[np.int64], free_share: float = 0.0) -> NDArray[np.bool_]:
     """[B, F, C] masks: a main keyframe near the end, sometimes earlier partial keyframes; none in `free_share` of them."""
     mask = np.zeros((len(length), enc.FRAMES, ft.NUM_CHANNELS), dtype=bool)
     free = rng.random(len(length)) < free_share
