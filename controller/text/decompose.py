@@ -137,6 +137,8 @@ def _kind(piece: str) -> str:
     tokens = [t for t in _tokens(piece) if t != "-"]
     if not tokens:
         return "empty"
+    if tokens[0] == "step":  # "then step back": the verb (a unit only after a number: "back two steps")
+        return "action"
     if all(t in _MODIFIER_WORDS or _is_number(t) for t in tokens):
         return "modifier"
     if all(t in _MODIFIER_WORDS or t in DIRECTION_WORDS or _is_number(t) for t in tokens):

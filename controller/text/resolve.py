@@ -232,8 +232,8 @@ _LOWER_ARMS_RE = re.compile(
 )
 # "hold it for 3 seconds" after a gesture: the same gesture, longer.
 _HOLD_RE = re.compile(r"^(?:hold|keep) (?:it|them|that|this|that pose|the pose|your (?:arms?|hands?)|them up|it up)\b")
-# A bare "go back"/"walk back" (no amount): back to the start.
-_BARE_BACK_RE = re.compile(r"^(?:go|walk|head|move|come|get|step) back(?: again)?$")
+# A bare "go back"/"walk back" (no amount): back to the start; "step back" is one step backward.
+_BARE_BACK_RE = re.compile(r"^(?:go|walk|head|move|come|get) back(?: again)?$")
 _THERE_AND_BACK_RE = re.compile(r"\band (?:come |walk |go |head )?back(?: again)?\b")
 
 # First-word verbs that decide the behaviour when the rest of the part is plain.

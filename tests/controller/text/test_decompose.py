@@ -64,6 +64,8 @@ def test_word_numbers(text: str, expected: str) -> None:
         ("walk forward, waving your left hand", ["walk forward waving your left hand"]),
         ("turn right, then left, then wave", ["turn right", "turn left", "wave"]),
         ("walk forward followed by a turn to the left", ["walk forward", "a turn to the left"]),
+        ("walk forward a meter, then step back", ["walk forward 1 meter", "step back"]),
+        ("walk forward a meter, then back two steps", ["walk forward 1 meter", "walk back 2 steps"]),
     ],
 )  # fmt: skip
 def test_split_clauses(prompt: str, clauses: list[str]) -> None:
