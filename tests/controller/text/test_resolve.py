@@ -237,6 +237,8 @@ def test_bare_go_back_returns_to_the_start(encoder: SentenceEncoder) -> None:
     assert alone.displacement == (-1.0, 0.0, 0.0)
     (measured,) = _program("go back two meters", encoder).clauses
     assert measured.displacement == (-2.0, 0.0, 0.0)
+    _walk, step = _program("walk forward a meter, then step back", encoder).clauses  # one step, not a return
+    assert step.quantities["behaviour"] == "walk" and step.displacement == pytest.approx((-0.3, 0.0, 0.0))
 
 
 def test_hold_it_keeps_the_gesture_and_lowering_the_arms_is_a_short_stand(encoder: SentenceEncoder) -> None:
