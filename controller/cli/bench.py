@@ -5,7 +5,7 @@ g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
-g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--condition-text]
+g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--no-text]
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--policy", default="fastsac")
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
     text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-naive comparison on the composed plans")
-    text.add_argument("--condition-text", action="store_true", help="put each clause's text in the planner's text slot")
+    text.add_argument("--no-text", action="store_true", help="leave the planner's text slot empty (default: each clause's text)")
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
     caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
@@ -103,7 +103,7 @@ def _text(args: argparse.Namespace) -> int:
     from controller.text.service import TextPlanner  # noqa: PLC0415
 
     cfg = TextBenchConfig(suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic)
-    planner = TextPlanner.load(condition_text=args.condition_text)
+    planner = TextPlanner.load(condition_text=not args.no_text)
     report = run_text_bench(
         cfg,
         planner.resolve,

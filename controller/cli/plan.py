@@ -1,7 +1,7 @@
 """`g1ctl plan PROMPT`: a typed instruction resolved into clauses, and run on the simulated G1 with --sim.
 
 g1ctl plan "walk forward two meters, then turn left 90 degrees, then wave with your right hand"
-           [--sim] [--video runs/plan.mp4] [--report runs/plan.json] [--seed N] [--policy fastsac] [--naive] [--condition-text] [--progress]
+           [--sim] [--video runs/plan.mp4] [--report runs/plan.json] [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress]
 
 Prints the decomposition (clauses, resolved quantities, gestures); with --sim runs it through
 the planner in the loop and prints what each clause did, measured. A prompt the stack cannot
@@ -28,7 +28,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     plan.add_argument("--naive", action="store_true", help="join clauses without blending (the baseline of the transition score)")
     plan.add_argument("--progress", action="store_true", help="show a progress bar")
     plan.add_argument(
-        "--condition-text", action="store_true", help="put each clause's text in the planner's text slot (off: free arms pick up gestures)"
+        "--no-text", action="store_true", help="leave the planner's text slot empty (each clause's text conditions it by default)"
     )
 
 
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
         use_headless_gl()  # before MuJoCo is imported
     from controller.text.service import TextPlanner  # noqa: PLC0415 - loads the sentence encoder
 
-    planner = TextPlanner.load(condition_text=args.condition_text)
+    planner = TextPlanner.load(condition_text=not args.no_text)
     program = planner.resolve(args.prompt)
     print(planner.describe(program))
     if not args.sim:
