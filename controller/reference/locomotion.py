@@ -28,10 +28,10 @@ class LocomotionConfig:
     plan_frames: int = 44  # 1.47 s at 30 fps: a multiple of 4 in 24-64 (the planner contract)
     spring: SpringConfig = field(default_factory=SpringConfig)
     gestures: GestureConfig = field(default_factory=GestureConfig)
-    # Plans continue a context with its pelvis levelled (heading, height and joints kept). Each plan continues
-    # the previous one's frames and nothing else holds the tilt: on `random_commands` the executed plans' pelvis
+    # Plans continue a context whose pelvis tilts at most this much (None: as planned). Each plan continues the
+    # previous one's frames and nothing else holds the tilt: on `random_commands` the executed plans' pelvis
     # tilt reached 80 degrees, on a text plan's "turn around" 177 degrees and the root height 1e13 m.
-    level_context: bool = True
+    max_context_tilt_deg: float | None = 10.0
 
     def __post_init__(self) -> None:
         if self.plan_frames % 4 or not 24 <= self.plan_frames <= 64:
@@ -115,8 +115,8 @@ class SmartLocomotion:
 
     def request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         """The plan that continues `context` towards where the spring takes the root under the command."""
-        if self.cfg.level_context:
-            context = levelled(context)
+        if self.cfg.max_context_tilt_deg is not None:
+            context = tilt_limited(context, math.radians(self.cfg.max_context_tilt_deg))
         state = self._continued(root_state_from_frames(context, FPS), splice_time)
         path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
         self.path, self.path_start = path, splice_time
@@ -139,8 +139,13 @@ class SmartLocomotion:
         )
 
 
-def levelled(frames: FloatArray) -> FloatArray:
-    """`frames` (qpos [K, 36]) with each root orientation reduced to its heading: the pelvis level, all else kept."""
+def tilt_limited(frames: FloatArray, max_tilt_rad: float) -> FloatArray:
+    """`frames` (qpos [K, 36]) with each root tilt (the rotation left without the heading) at most `max_tilt_rad`, all else kept."""
     out = np.array(frames, dtype=np.float64)
-    out[:, g1.QPOS_ROOT_QUAT] = quat.from_yaw(quat.heading(out[:, g1.QPOS_ROOT_QUAT]))
+    rotation = out[:, g1.QPOS_ROOT_QUAT]
+    yaw = quat.from_yaw(quat.heading(rotation))
+    tilt = quat.log(quat.multiply(quat.conjugate(yaw), rotation))  # rotation vectors [K, 3]
+    angle = np.linalg.norm(tilt, axis=1, keepdims=True)
+    scale = np.minimum(1.0, max_tilt_rad / np.maximum(angle, 1e-12))
+    out[:, g1.QPOS_ROOT_QUAT] = quat.multiply(yaw, quat.exp(tilt * scale))
     return out

@@ -50,9 +50,9 @@ class SchedulerConfig:
     simulated_latency_s: float = 0.02  # simulated clock: a plan is ready this long after its request
     stall_timeout_s: float = 1.0  # wall seconds a plan may take before it counts as failed
     # A plan whose pelvis tilts further than this, or whose height moves more than this within the plan, is a
-    # failure, not a reference: before contexts were levelled (`LocomotionConfig.level_context`) a drifting
-    # context took the shipped planner's plans to 177 degrees and the root to 1e13 m. Sound plans on
-    # `random_commands` (120 s, seed 1): at most 45 degrees and 0.23 m, mid-plan; their first 6 frames 18 degrees.
+    # failure, not a reference: before context tilts were capped (`LocomotionConfig.max_context_tilt_deg`) a
+    # drifting context took the shipped planner's plans to 177 degrees and the root to 1e13 m. Sound plans on
+    # `random_commands` (120 s, seed 1): at most 31 degrees and 0.29 m, mid-plan; their first 6 frames 18 degrees.
     max_root_tilt_deg: float = 90.0
     max_root_height_change_m: float = 0.4
 
