@@ -8,6 +8,7 @@ g1ctl hw damp    --hardware my-robot [--seconds 2]
 g1ctl hw imu     --hardware my-robot [--seconds 1]
 g1ctl hw frame encode --protocol mit --model AK80-9 --position 1.0 --kp 50 --kd 1
 g1ctl hw frame decode --protocol unitree-rs485 fdee12...
+g1ctl hw frame encode --protocol unitree-hg --id 0 --mode 1 --position 0.2 --kp 60 --kd 1 [--mode-machine 5]   # a whole LowCmd_
 """
 
 from __future__ import annotations
@@ -52,10 +53,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     enc = frame_sub.add_parser("encode", help="command values (motor side) -> data bytes as hex")
     dec = frame_sub.add_parser("decode", help="data bytes as hex -> fields as JSON")
     for p in (enc, dec):
-        p.add_argument("--protocol", required=True, choices=("mit", "unitree-rs485"))
+        p.add_argument("--protocol", required=True, choices=("mit", "unitree-rs485", "unitree-hg"))
         p.add_argument("--model", default=None, help="MIT motor model (configs/motors.yaml)")
-    enc.add_argument("--id", type=int, default=1)
-    enc.add_argument("--mode", type=int, default=1, help="RS-485: 0 brake, 1 FOC, 2 calibrate")
+    enc.add_argument("--id", type=int, default=1, help="motor id (unitree-hg: the motor slot, 0-34; joints are 0-28)")
+    enc.add_argument("--mode", type=int, default=1, help="RS-485: 0 brake, 1 FOC, 2 calibrate; unitree-hg: 1 enables the motor")
+    enc.add_argument("--mode-machine", type=int, default=0, help="unitree-hg: copied from the robot's LowState_")
     for field in ("position", "velocity", "torque", "kp", "kd"):
         enc.add_argument(f"--{field}", type=float, default=0.0)
     dec.add_argument("hex", help="the frame's data bytes")
@@ -97,7 +99,7 @@ def _frame(args: argparse.Namespace) -> int:
         ranges = models[args.model]
     if args.frame_command == "encode":
         values = {k: getattr(args, k) for k in ("position", "velocity", "torque", "kp", "kd")}
-        print(encode_frame(args.protocol, ranges, args.id, args.mode, values).hex())
+        print(encode_frame(args.protocol, ranges, args.id, args.mode, values, args.mode_machine).hex())
     else:
         print(json.dumps(decode_frame(args.protocol, args.hex, ranges, args.reply)))
     return 0

@@ -1,4 +1,9 @@
-"""CRC-16/KERMIT (CCITT polynomial, reflected 0x8408, initial value 0, no final xor) and CRC-framed checks."""
+"""CRCs of the wire protocols, and CRC-framed checks.
+
+CRC-16/KERMIT (CCITT polynomial, reflected 0x8408, initial value 0, no final xor): the RS-485
+motors. CRC-32/MPEG-2 fed 32-bit words (polynomial 0x04C11DB7, initial 0xFFFFFFFF, MSB first,
+no final xor): the G1's DDS messages, as Unitree's SDK computes it (`crc32_core`).
+"""
 
 from __future__ import annotations
 
@@ -41,3 +46,34 @@ def check_crc_frame(frame: bytes, size: int, header: bytes, what: str) -> None:
     stored = frame[-2] | (frame[-1] << 8)
     if crc != stored:
         raise CrcError(f"{what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
+
+
+def _crc32_word_tables() -> tuple[tuple[int, ...], ...]:
+    """T[k][b] = (b << 8k) shifted through 32 zero bits of CRC-32 with polynomial 0x04C11DB7, MSB first."""
+
+    def through_32_bits(x: int) -> int:
+        for _ in range(32):
+            x = ((x << 1) ^ 0x04C11DB7) & 0xFFFFFFFF if x & 0x80000000 else (x << 1) & 0xFFFFFFFF
+        return x
+
+    return tuple(tuple(through_32_bits(b << (8 * k)) for b in range(256)) for k in range(4))
+
+
+_T0, _T1, _T2, _T3 = _crc32_word_tables()
+
+
+def crc32_mpeg2(data: bytes | bytearray | memoryview, crc: int = 0xFFFFFFFF) -> int:
+    """CRC-32/MPEG-2 (polynomial 0x04C11DB7, initial 0xFFFFFFFF, MSB first, no final xor); check of b"123456789": 0x0376E6E7."""
+    for byte in data:
+        crc ^= byte << 24
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x04C11DB7) & 0xFFFFFFFF if crc & 0x80000000 else (crc << 1) & 0xFFFFFFFF
+    return crc
+
+
+def crc32_words(words: list[int], crc: int = 0xFFFFFFFF) -> int:
+    """CRC-32/MPEG-2 over uint32 `words`, each fed most significant bit first (Unitree's `crc32_core`), 32 bits per step."""
+    for word in words:
+        x = crc ^ word
+        crc = _T3[x >> 24] ^ _T2[(x >> 16) & 0xFF] ^ _T1[(x >> 8) & 0xFF] ^ _T0[x & 0xFF]
+    return crc

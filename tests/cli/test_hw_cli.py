@@ -72,6 +72,17 @@ def test_frame_encode_decode_rs485() -> None:
     assert decoded["kind"] == "command" and decoded["motor_id"] == 1 and decoded["torque"] == 0.5
 
 
+def test_frame_encode_decode_unitree_hg() -> None:
+    args = ("--id", "3", "--mode", "1", "--position", "0.25", "--velocity", "-1", "--torque", "0.5", "--kp", "60", "--kd", "1.5")
+    result = g1ctl("hw", "frame", "encode", "--protocol", "unitree-hg", *args, "--mode-machine", "5")
+    frame = result.stdout.strip()
+    assert result.returncode == 0 and len(frame) == 2 * 1004 and frame.startswith("0005") and frame.endswith("62a619fc")
+    decoded = json.loads(g1ctl("hw", "frame", "decode", "--protocol", "unitree-hg", frame).stdout)
+    assert decoded["kind"] == "LowCmd_" and decoded["mode_machine"] == 5 and decoded["motors"]["3"]["kp"] == 60.0
+    assert "LowCmd_ CRC mismatch" in one_line_error(g1ctl("hw", "frame", "decode", "--protocol", "unitree-hg", frame[:-8] + "00000000"))
+    assert "LowCmd_ (1004 bytes) or LowState_ (2092)" in one_line_error(g1ctl("hw", "frame", "decode", "--protocol", "unitree-hg", "00ff"))
+
+
 def test_frame_bad_input_is_one_line() -> None:
     assert "CRC mismatch" in one_line_error(
         g1ctl("hw", "frame", "decode", "--protocol", "unitree-rs485", "feee118000280009020000000140004691")
