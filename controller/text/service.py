@@ -10,7 +10,7 @@ On by default. With the weights before the current ones it was off: the arms a p
 free picked up gestures from the training captions ("turn around" raised the right arm) and
 `g1ctl bench text` passed 58 of 59 prompts against 59 without. With the current weights, and
 free arms held while a gesture plays, both pass 59 of 59 with order accuracy 1.0 (transition
-score of the simulated runs 0.234 with text, 0.217 without).
+score of the simulated runs 0.180 with text, 0.214 without).
 """
 
 from __future__ import annotations
