@@ -7,6 +7,8 @@ no final xor): the G1's DDS messages, as Unitree's SDK computes it (`crc32_core`
 
 from __future__ import annotations
 
+import functools
+
 
 def _table() -> tuple[int, ...]:
     table = []
@@ -48,8 +50,12 @@ def check_crc_frame(frame: bytes, size: int, header: bytes, what: str) -> None:
         raise CrcError(f"{what} CRC mismatch: stored {stored:#06x}, computed {crc:#06x}")
 
 
+@functools.cache
 def _crc32_word_tables() -> tuple[tuple[int, ...], ...]:
-    """T[k][b] = (b << 8k) shifted through 32 zero bits of CRC-32 with polynomial 0x04C11DB7, MSB first."""
+    """T[k][b] = (b << 8k) shifted through 32 zero bits of CRC-32 with polynomial 0x04C11DB7, MSB first.
+
+    Built on first use (6 ms): the CAN and RS-485 paths import this module and never need them.
+    """
 
     def through_32_bits(x: int) -> int:
         for _ in range(32):
@@ -57,9 +63,6 @@ def _crc32_word_tables() -> tuple[tuple[int, ...], ...]:
         return x
 
     return tuple(tuple(through_32_bits(b << (8 * k)) for b in range(256)) for k in range(4))
-
-
-_T0, _T1, _T2, _T3 = _crc32_word_tables()
 
 
 def crc32_mpeg2(data: bytes | bytearray | memoryview, crc: int = 0xFFFFFFFF) -> int:
@@ -73,7 +76,8 @@ def crc32_mpeg2(data: bytes | bytearray | memoryview, crc: int = 0xFFFFFFFF) -> 
 
 def crc32_words(words: list[int], crc: int = 0xFFFFFFFF) -> int:
     """CRC-32/MPEG-2 over uint32 `words`, each fed most significant bit first (Unitree's `crc32_core`), 32 bits per step."""
+    t0, t1, t2, t3 = _crc32_word_tables()
     for word in words:
         x = crc ^ word
-        crc = _T3[x >> 24] ^ _T2[(x >> 16) & 0xFF] ^ _T1[(x >> 8) & 0xFF] ^ _T0[x & 0xFF]
+        crc = t3[x >> 24] ^ t2[(x >> 16) & 0xFF] ^ t1[(x >> 8) & 0xFF] ^ t0[x & 0xFF]
     return crc
