@@ -75,9 +75,30 @@ def new_low_cmd(mode_pr: int = 0, mode_machine: int = 0) -> np.ndarray:
     return record
 
 
+def canonical(record: np.ndarray) -> np.ndarray:
+    """A copy of `record` whose padding bytes are zero.
+
+    The CRC covers the padding too, and numpy's own copies of aligned records leave it
+    uninitialized: every record that is packed or checked goes through here.
+    """
+    out = np.zeros((), dtype=record.dtype)
+    _copy_fields(out, np.asarray(record), record.dtype)
+    return out
+
+
+def _copy_fields(dst: np.ndarray, src: np.ndarray, dtype: np.dtype[Any]) -> None:
+    """Leaf field by leaf field (a whole-record assignment copies the padding too)."""
+    for name in dtype.names or ():
+        sub = dtype.fields[name][0].base  # type: ignore[index]
+        if sub.names:
+            _copy_fields(dst[name], src[name], sub)
+        else:
+            dst[name] = src[name]
+
+
 def pack(record: np.ndarray) -> bytes:
-    """A `LowCmd_` or `LowState_` record as wire bytes, its CRC computed and stored last."""
-    data = bytearray(record.tobytes())
+    """A `LowCmd_` or `LowState_` record as wire bytes (padding zero), its CRC computed and stored last."""
+    data = bytearray(canonical(record).tobytes())
     struct.pack_into("<I", data, len(data) - 4, message_crc(data))
     return bytes(data)
 
@@ -89,7 +110,7 @@ def _unpack(data: bytes | bytearray | memoryview, dtype: np.dtype[Any], what: st
     computed = message_crc(data)
     if stored != computed:
         raise CrcError(f"{what} CRC mismatch: stored {stored:#010x}, computed {computed:#010x}")
-    return np.frombuffer(bytes(data), dtype=dtype)[0].copy()
+    return canonical(np.frombuffer(bytes(data), dtype=dtype)[0])
 
 
 def unpack_low_cmd(data: bytes | bytearray | memoryview) -> np.ndarray:

@@ -110,3 +110,14 @@ def test_the_remote_drives_like_the_gamepad() -> None:
     assert still.velocity.is_zero() and still.buttons.estop and still.buttons.start and not still.buttons.stop
     gone = map_remote(hg.WirelessRemote(ly=1.0), cfg, limits, age_s=1.0)
     assert not gone.alive and gone.velocity.is_zero()
+
+
+def test_without_the_g1_extra_the_dds_backend_names_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    import importlib.util  # noqa: PLC0415
+
+    from hw import dds  # noqa: PLC0415
+    from hw.errors import ConfigError  # noqa: PLC0415
+
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *args: None)
+    with pytest.raises(ConfigError, match=r"needs cyclonedds: pip install -e '\.\[g1\]'"):
+        dds.require_cyclonedds()

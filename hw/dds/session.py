@@ -1,0 +1,86 @@
+"""A Cyclone DDS participant on the G1's domain and network interface, with best-effort writers and readers.
+
+The robot publishes `rt/lowstate` and takes `rt/lowcmd` on domain 0 over its own network
+interface; the simulated robot uses domain 1 on `lo`. Discovery is unicast to the interface's
+peers (`peers`, default none: multicast on the interface), so a loopback run needs no multicast.
+Best effort, keep last 1: a control message that is late is worth nothing, and a resend would
+only delay the next one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+from xml.sax.saxutils import quoteattr
+
+from hw.dds import require_cyclonedds
+from hw.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class DdsConfig:
+    domain: int = 1
+    interface: str = "lo"
+    peers: tuple[str, ...] = ("127.0.0.1",)  # unicast discovery; empty: multicast on the interface
+    lowcmd_topic: str = "rt/lowcmd"
+    lowstate_topic: str = "rt/lowstate"
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.domain <= 232:
+            raise ConfigError(f"DDS domain must be 0..232, got {self.domain}")
+        if not self.interface:
+            raise ConfigError("DDS interface must name a network interface (e.g. lo, eth0, enp3s0)")
+
+
+def domain_xml(cfg: DdsConfig) -> str:
+    """The Cyclone DDS configuration of the domain: which interface, which discovery peers."""
+    peers = "".join(f"<Peer address={quoteattr(p)}/>" for p in cfg.peers)
+    multicast = "false" if cfg.peers else "true"
+    return (
+        f'<CycloneDDS><Domain id="any"><General><Interfaces><NetworkInterface name={quoteattr(cfg.interface)}/></Interfaces>'
+        f"<AllowMulticast>{multicast}</AllowMulticast></General>"
+        f"<Discovery><ParticipantIndex>auto</ParticipantIndex><Peers>{peers}</Peers></Discovery></Domain></CycloneDDS>"
+    )
+
+
+class DdsSession:
+    """One participant; `writer(topic, type)` and `reader(topic, type)` with the control QoS. `close()` releases it."""
+
+    def __init__(self, cfg: DdsConfig) -> None:
+        require_cyclonedds()
+        from cyclonedds.core import Policy, Qos  # noqa: PLC0415 - the optional extra
+        from cyclonedds.domain import Domain, DomainParticipant  # noqa: PLC0415
+
+        self.cfg = cfg
+        self._domain: Any = None
+        self.participant: Any = None
+        try:
+            self._domain = Domain(cfg.domain, domain_xml(cfg))
+            self.participant = DomainParticipant(cfg.domain)
+        except Exception as exc:  # cyclonedds raises its own DDSException: name the config that failed
+            raise ConfigError(f"cannot join DDS domain {cfg.domain} on interface '{cfg.interface}': {exc}") from exc
+        self._qos = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
+        self._topics: dict[str, Any] = {}
+
+    def _topic(self, name: str, datatype: type) -> Any:
+        from cyclonedds.topic import Topic  # noqa: PLC0415
+
+        if name not in self._topics:
+            self._topics[name] = Topic(self.participant, name, datatype)
+        return self._topics[name]
+
+    def writer(self, topic: str, datatype: type) -> Any:
+        from cyclonedds.pub import DataWriter  # noqa: PLC0415
+
+        return DataWriter(self.participant, self._topic(topic, datatype), qos=self._qos)
+
+    def reader(self, topic: str, datatype: type) -> Any:
+        from cyclonedds.sub import DataReader  # noqa: PLC0415
+
+        return DataReader(self.participant, self._topic(topic, datatype), qos=self._qos)
+
+    def close(self) -> None:
+        """Drop the participant (its readers and writers with it)."""
+        self._topics.clear()
+        self.participant = None
+        self._domain = None
