@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import struct
 
 import numpy as np
@@ -9,6 +10,8 @@ import pytest
 
 from controller.inputs.base import CommandLimits
 from controller.inputs.unitree_remote import RemoteConfig, map_remote
+from hw import dds
+from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
 from hw.protocols.crc import CrcError, FrameError, crc32_mpeg2, crc32_words
 
@@ -113,11 +116,6 @@ def test_the_remote_drives_like_the_gamepad() -> None:
 
 
 def test_without_the_g1_extra_the_dds_backend_names_it(monkeypatch: pytest.MonkeyPatch) -> None:
-    import importlib.util  # noqa: PLC0415
-
-    from hw import dds  # noqa: PLC0415
-    from hw.errors import ConfigError  # noqa: PLC0415
-
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *args: None)
     with pytest.raises(ConfigError, match=r"needs cyclonedds: pip install -e '\.\[g1\]'"):
         dds.require_cyclonedds()
