@@ -96,13 +96,13 @@ def _values(value: Any) -> Any:
 
 
 def low_cmd_from_record(record: np.ndarray) -> LowCmd_:
-    """A packed `LowCmd_` record (its CRC already set by `hg.pack` or `with_crc`) as the DDS message."""
+    """A packed `LowCmd_` record (its CRC already set: `hg.with_crc`) as the DDS message."""
     motors = [MotorCmd_(*(_values(slot[name]) for name in _MOTOR_CMD_FIELDS)) for slot in record["motor_cmd"]]
     return LowCmd_(int(record["mode_pr"]), int(record["mode_machine"]), motors, _values(record["reserve"]), int(record["crc"]))
 
 
 def low_cmd_to_record(message: LowCmd_) -> np.ndarray:
-    """The DDS message as a `LowCmd_` record (CRC as received: check it with `crc_ok`)."""
+    """The DDS message as a `LowCmd_` record (CRC as received: check it with `hg.crc_ok`)."""
     record = np.zeros((), dtype=hg.LOW_CMD)
     record["mode_pr"], record["mode_machine"], record["crc"] = message.mode_pr, message.mode_machine, message.crc
     record["reserve"] = message.reserve
@@ -130,15 +130,3 @@ def low_state_to_record(message: LowState_) -> np.ndarray:
     remote = message.wireless_remote  # a uint8 array arrives as bytes
     record["wireless_remote"] = np.frombuffer(remote, dtype=np.uint8) if isinstance(remote, bytes | bytearray) else remote
     return record
-
-
-def with_crc(record: np.ndarray) -> np.ndarray:
-    """`record` with its CRC field set (over its packed bytes, padding zero), ready to send."""
-    out = hg.canonical(record)
-    out["crc"] = hg.message_crc(out.tobytes())
-    return out
-
-
-def crc_ok(record: np.ndarray) -> bool:
-    """Whether a received record's CRC matches its packed bytes (padding zero: DDS does not carry it)."""
-    return int(record["crc"]) == hg.message_crc(hg.canonical(record).tobytes())

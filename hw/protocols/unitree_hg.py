@@ -96,6 +96,18 @@ def _copy_fields(dst: np.ndarray, src: np.ndarray, dtype: np.dtype[Any]) -> None
             dst[name] = src[name]
 
 
+def with_crc(record: np.ndarray) -> np.ndarray:
+    """A copy of `record` (padding zero) with its CRC field set, ready to send."""
+    out = canonical(record)
+    out["crc"] = message_crc(out.tobytes())
+    return out
+
+
+def crc_ok(record: np.ndarray) -> bool:
+    """Whether a record's CRC matches its fields (packed with zero padding: DDS does not carry the padding)."""
+    return int(record["crc"]) == message_crc(canonical(record).tobytes())
+
+
 def pack(record: np.ndarray) -> bytes:
     """A `LowCmd_` or `LowState_` record as wire bytes (padding zero), its CRC computed and stored last."""
     data = bytearray(canonical(record).tobytes())

@@ -22,18 +22,18 @@ def a_low_state() -> np.ndarray:
     record["motor_state"]["q"][:29] = np.linspace(-1.0, 1.0, 29)
     record["motor_state"]["temperature"][3] = (40, 35)
     record["wireless_remote"] = np.frombuffer(hg.encode_wireless_remote(hg.WirelessRemote(ly=0.5, buttons=frozenset({"A"}))), np.uint8)
-    return m.with_crc(record)
+    return hg.with_crc(record)
 
 
 def test_cdr_round_trips_keep_every_field_and_the_crc() -> None:
     command = hg.unpack_low_cmd(hg.encode_motor_command(3, 1, 0.25, -1.0, 0.5, 60.0, 1.5, mode_machine=5))
     back = m.low_cmd_to_record(m.LowCmd_.deserialize(m.low_cmd_from_record(command).serialize()))
-    assert hg.canonical(back).tobytes() == hg.canonical(command).tobytes() and m.crc_ok(back)
+    assert hg.canonical(back).tobytes() == hg.canonical(command).tobytes() and hg.crc_ok(back)
     state = a_low_state()
     received = m.low_state_to_record(m.LowState_.deserialize(m.low_state_from_record(state).serialize()))
-    assert received.tobytes() == state.tobytes() and m.crc_ok(received)
+    assert received.tobytes() == state.tobytes() and hg.crc_ok(received)
     received["motor_state"]["q"][0] += 0.01  # a changed field no longer matches its CRC
-    assert not m.crc_ok(received)
+    assert not hg.crc_ok(received)
 
 
 def test_records_pack_the_same_whatever_numpy_left_in_their_padding() -> None:
@@ -61,6 +61,6 @@ def test_a_low_cmd_crosses_loopback_dds() -> None:
             received = reader.take(N=1)
         assert received, "no LowCmd_ came back over loopback in 5 s"
         record = m.low_cmd_to_record(received[0])
-        assert m.crc_ok(record) and int(record["mode_machine"]) == 2 and float(record["motor_cmd"][0]["kp"]) == 40.0
+        assert hg.crc_ok(record) and int(record["mode_machine"]) == 2 and float(record["motor_cmd"][0]["kp"]) == 40.0
     finally:
         session.close()
