@@ -4,6 +4,7 @@ Usage (each command group's module shows its own):
     g1ctl sim ...                 run a scenario on the simulated G1 (controller/cli/sim.py)
     g1ctl run ...                 drive it through the planner: viewer or headless, keyboard, gamepad (controller/cli/run.py)
     g1ctl hw ...                  bench bring-up on real or simulated hardware (controller/cli/hw.py)
+    g1ctl robot --dds             a simulated G1 in its own process on the robot's DDS topics (controller/cli/robot.py)
     g1ctl plan "PROMPT" [--sim]   a typed instruction planned into clauses, run on the simulated G1 (controller/cli/plan.py)
     g1ctl bench loop|hw|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
     g1ctl dataset record|import|info   the planner's motion dataset (controller/cli/dataset.py)
@@ -24,7 +25,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from controller.cli import bench, catalog, dataset, plan, planner, run, sim
+from controller.cli import bench, catalog, dataset, plan, planner, robot, run, sim
 from controller.cli import hw as hw_commands
 from hw.errors import G1Error, HardwareFault, RunAborted
 
@@ -32,7 +33,7 @@ from hw.errors import G1Error, HardwareFault, RunAborted
 # dependencies (MuJoCo, onnxruntime, torch) only when its command runs.
 COMMANDS: dict[str, ModuleType] = {
     "sim": sim, "run": run, "hw": hw_commands, "plan": plan, "bench": bench, "dataset": dataset,
-    "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog,
+    "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog, "robot": robot,
 }  # fmt: skip
 
 

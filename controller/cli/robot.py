@@ -1,0 +1,32 @@
+"""`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5]`: a simulated G1 that speaks DDS."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from hw.errors import ConfigError
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    robot = sub.add_parser("robot", help="a simulated G1 in its own process, on the robot's DDS topics")
+    robot.add_argument("--dds", action="store_true", help="speak the G1's low-level DDS protocol (rt/lowcmd, rt/lowstate)")
+    robot.add_argument("--domain", type=int, default=1, help="DDS domain (the real robot uses 0)")
+    robot.add_argument("--interface", default="lo", help="network interface")
+    robot.add_argument("--duration", type=float, default=None, help="seconds to run (default: until stopped)")
+    robot.add_argument("--mode-machine", type=int, default=5, help="the robot type code it reports in LowState_")
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.dds:
+        raise ConfigError("g1ctl robot needs a protocol: --dds (the G1's low-level DDS topics)")
+    from hw.dds.session import DdsConfig  # noqa: PLC0415
+    from hw.emulation.g1_lowlevel import LowLevelConfig  # noqa: PLC0415
+    from sim.dds_robot import DdsRobotConfig, run_dds_robot  # noqa: PLC0415
+
+    cfg = DdsRobotConfig(
+        dds=DdsConfig(domain=args.domain, interface=args.interface), lowlevel=LowLevelConfig(mode_machine=args.mode_machine),
+        duration_s=args.duration, assets_dir=args.assets_dir,
+    )  # fmt: skip
+    print(json.dumps(run_dds_robot(cfg)))
+    return 0
