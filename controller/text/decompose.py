@@ -115,6 +115,7 @@ def normalize(prompt: str) -> str:
     text = re.sub(r"(\d)([a-z°]+)\b", r"\1 \2", text)  # 2m, 90deg, 3x
     text = re.sub(r"([,;!?]|\.(?!\d))", r" \1 ", text)  # punctuation apart from words, so numbers read across it
     text = words_to_digits(text)
+    text = re.sub(r"\b(?:do|make|spin|turn|pull off) an? (90|180|270|360|540|720)\b(?! degrees)", r"turn \1 degrees", text)  # "do a 360"
     text = re.sub(r"\bx (\d+)\b", r"\1 times", text)
     text = re.sub(r"\b(\d+) x\b", r"\1 times", text)
     text = _ADDRESS_RE.sub(" ", text)

@@ -65,6 +65,7 @@ def test_word_numbers(text: str, expected: str) -> None:
         ("turn right, then left, then wave", ["turn right", "turn left", "wave"]),
         ("walk forward followed by a turn to the left", ["walk forward", "a turn to the left"]),
         ("walk forward a meter, then step back", ["walk forward 1 meter", "step back"]),
+        ("do a 360, then wave", ["turn 360 degrees", "wave"]),
         ("walk forward a meter, then back two steps", ["walk forward 1 meter", "walk back 2 steps"]),
     ],
 )  # fmt: skip
