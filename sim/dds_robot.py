@@ -13,6 +13,7 @@ from __future__ import annotations
 import signal
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import FrameType
 from typing import Any
 
@@ -22,17 +23,16 @@ from hw.emulation.g1_lowlevel import LowLevelConfig
 
 @dataclass(frozen=True)
 class DdsRobotConfig:
+    mjcf: Path  # the G1 model (the assets' g1_mjcf)
     dds: DdsConfig = field(default_factory=DdsConfig)
     lowlevel: LowLevelConfig = field(default_factory=LowLevelConfig)
     period_s: float = 0.002  # LowState_ every 2 ms, as the robot publishes it
     duration_s: float | None = None  # None: until stopped
-    assets_dir: str | None = None
 
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
     """Serve the simulated robot until the duration ends or a stop signal comes; the counters as a report."""
-    from controller.assets import ensure_assets  # noqa: PLC0415 - MuJoCo and cyclonedds only here
-    from hw.dds import messages  # noqa: PLC0415
+    from hw.dds import messages  # noqa: PLC0415 - MuJoCo and cyclonedds only here
     from hw.dds.session import DdsSession  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import G1LowLevel  # noqa: PLC0415
     from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415
@@ -45,7 +45,7 @@ def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
         stop["requested"] = True
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
-    robot = SimRobot(build_model(ensure_assets(cfg.assets_dir, quiet=True).g1_mjcf))
+    robot = SimRobot(build_model(cfg.mjcf))
     session = DdsSession(cfg.dds)
     published = 0
     try:

@@ -20,13 +20,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run(args: argparse.Namespace) -> int:
     if not args.dds:
         raise ConfigError("g1ctl robot needs a protocol: --dds (the G1's low-level DDS topics)")
+    from controller.assets import ensure_assets  # noqa: PLC0415
     from hw.dds.session import DdsConfig  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import LowLevelConfig  # noqa: PLC0415
     from sim.dds_robot import DdsRobotConfig, run_dds_robot  # noqa: PLC0415
 
     cfg = DdsRobotConfig(
-        dds=DdsConfig(domain=args.domain, interface=args.interface), lowlevel=LowLevelConfig(mode_machine=args.mode_machine),
-        duration_s=args.duration, assets_dir=args.assets_dir,
+        mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, dds=DdsConfig(domain=args.domain, interface=args.interface),
+        lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration,
     )  # fmt: skip
     print(json.dumps(run_dds_robot(cfg)))
     return 0

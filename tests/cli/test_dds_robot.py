@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -17,7 +18,7 @@ from hw.dds.session import DdsConfig, DdsSession
 from hw.protocols import unitree_hg as hg
 
 pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock
-DOMAIN = 41
+DOMAIN = 100 + os.getpid() % 100  # its own domain: two test runs on one machine must not hear each other
 
 
 def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> None:
@@ -44,6 +45,7 @@ def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> 
         bad = good.copy()
         bad["crc"] ^= 1
         commands.write(m.low_cmd_from_record(bad))
+        time.sleep(0.05)  # keep-last-1: the robot takes the newest command, so the bad one must stand alone for a moment
         for _ in range(20):
             commands.write(m.low_cmd_from_record(good))
             time.sleep(0.01)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -48,7 +49,7 @@ def test_config_mistakes_are_named() -> None:
 
 
 def test_a_low_cmd_crosses_loopback_dds() -> None:
-    session = DdsSession(DdsConfig(domain=37, interface="lo"))
+    session = DdsSession(DdsConfig(domain=os.getpid() % 100, interface="lo"))  # its own domain per test run
     try:
         writer = session.writer("rt/lowcmd", m.LowCmd_)
         reader = session.reader("rt/lowcmd", m.LowCmd_)
