@@ -14,6 +14,7 @@ import pytest
 pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
 
 from hw.dds import messages as m
+from hw.dds.link import DdsLink, RobotNotFoundError
 from hw.dds.session import DdsConfig, DdsSession
 from hw.protocols import unitree_hg as hg
 
@@ -56,3 +57,39 @@ def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> 
     report = json.loads(out.strip().splitlines()[-1])
     assert report["states_published"] > 1000 and report["crc_errors"] >= 1 and report["commands"] >= 1
     assert report["timeouts"] >= 1 and report["limp"]  # the commands stopped: limp again, as the robot would
+
+
+def test_the_host_link_connects_learns_mode_machine_and_holds_a_joint() -> None:
+    domain = (DOMAIN + 50) % 233
+    lonely = DdsLink(DdsConfig(domain=(domain + 1) % 233, interface="lo"))
+    try:
+        with pytest.raises(RobotNotFoundError, match=r"no LowState_ from the robot on DDS domain \d+, interface 'lo' in 0.3 s"):
+            lonely.connect(timeout_s=0.3)
+    finally:
+        lonely.close()
+    child = subprocess.Popen(
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "5", "--mode-machine", "7"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    link = DdsLink(DdsConfig(domain=domain, interface="lo"))
+    try:
+        first = link.connect(timeout_s=5.0)
+        assert link.mode_machine == 7 and hg.crc_ok(first)
+        command = hg.new_low_cmd()  # mode_machine is the link's to set
+        knee = 3  # left_knee_joint
+        command["motor_cmd"]["mode"][knee], command["motor_cmd"]["q"][knee] = 1, 0.6
+        command["motor_cmd"]["kp"][knee], command["motor_cmd"]["kd"][knee] = 60.0, 2.0
+        t_end = time.monotonic() + 1.5
+        while time.monotonic() < t_end:
+            link.send(command)
+            age = link.poll()
+            assert age is not None and age < 0.1
+            time.sleep(0.002)
+        assert link.state is not None and int(link.state["motor_state"]["mode"][knee]) == 1
+        assert link.counters.crc_errors == 0 and link.counters.states_received > 100
+    finally:
+        link.close()
+    out, err = child.communicate(timeout=20)
+    assert child.returncode == 0, err
+    report = json.loads(out.strip().splitlines()[-1])
+    assert report["commands"] > 100 and report["mode_machine_mismatches"] == 0 and report["crc_errors"] == 0

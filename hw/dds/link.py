@@ -1,0 +1,92 @@
+"""The host's end of the G1's low-level DDS link: `LowCmd_` out on `rt/lowcmd`, the newest `LowState_` in.
+
+What the lifecycle robot builds on (configure, soft start, 500 Hz cycle, damping):
+
+- `connect(timeout_s)`: wait for the robot's first `LowState_` with a good CRC and learn its
+  `mode_machine` (every command must carry it), or fail naming the domain and interface.
+- `send(record)`: stamp `mode_machine` and the CRC on a `LowCmd_` record and publish it.
+- `poll(now)`: take what arrived, keep the newest state whose CRC matches (a bad one is
+  counted, never used), and say how old the newest good state is (`age`): a robot whose
+  state stops coming is stale, and the caller damps.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from hw.dds import messages
+from hw.dds.session import DdsConfig, DdsSession
+from hw.errors import HardwareFault
+from hw.protocols import unitree_hg as hg
+
+
+class RobotNotFoundError(HardwareFault):
+    """No `LowState_` came from the robot."""
+
+
+@dataclass
+class LinkCounters:
+    commands_sent: int = 0
+    states_received: int = 0  # with a good CRC
+    crc_errors: int = 0  # states whose CRC did not match: dropped
+    mode_machine_changes: int = 0  # the robot reported another mode_machine than at connect
+
+
+class DdsLink:
+    """One host's link to one robot over a `DdsSession`."""
+
+    def __init__(self, cfg: DdsConfig, clock: Callable[[], float] = time.monotonic) -> None:
+        self.cfg = cfg
+        self.clock = clock
+        self.session = DdsSession(cfg)
+        self._writer = self.session.writer(cfg.lowcmd_topic, messages.LowCmd_)
+        self._reader = self.session.reader(cfg.lowstate_topic, messages.LowState_)
+        self.counters = LinkCounters()
+        self.mode_machine: int | None = None
+        self.state: np.ndarray | None = None  # the newest LowState_ record with a good CRC
+        self.state_time = -np.inf  # clock time it arrived
+
+    def connect(self, timeout_s: float = 2.0) -> np.ndarray:
+        """The robot's first good `LowState_`; its `mode_machine` is kept for every command."""
+        deadline = self.clock() + timeout_s
+        while self.clock() < deadline:
+            if self.poll() is not None and self.state is not None:
+                self.mode_machine = int(self.state["mode_machine"])
+                return self.state
+            time.sleep(0.002)
+        bad = f" ({self.counters.crc_errors} with a bad CRC)" if self.counters.crc_errors else ""
+        raise RobotNotFoundError(
+            f"no LowState_ from the robot on DDS domain {self.cfg.domain}, interface '{self.cfg.interface}' in {timeout_s:g} s{bad}: "
+            "check that it is powered, the cable is in, and the domain and interface are the robot's"
+        )
+
+    def poll(self) -> float | None:
+        """Take what arrived; the age (s) of the newest good state, None before the first."""
+        for sample in self._reader.take(N=16):
+            if not isinstance(sample, messages.LowState_):  # a writer leaving sends a sample without data
+                continue
+            record = messages.low_state_to_record(sample)
+            if not hg.crc_ok(record):
+                self.counters.crc_errors += 1
+                continue
+            self.counters.states_received += 1
+            if self.mode_machine is not None and int(record["mode_machine"]) != self.mode_machine:
+                self.counters.mode_machine_changes += 1
+            self.state, self.state_time = record, self.clock()
+        return None if self.state is None else self.clock() - self.state_time
+
+    def send(self, record: np.ndarray) -> None:
+        """Publish a `LowCmd_` record with the robot's `mode_machine` and the CRC set."""
+        if self.mode_machine is None:
+            raise HardwareFault("send before connect: the robot's mode_machine is not known yet")
+        out = hg.canonical(record)
+        out["mode_machine"] = self.mode_machine
+        self._writer.write(messages.low_cmd_from_record(hg.with_crc(out)))
+        self.counters.commands_sent += 1
+
+    def close(self) -> None:
+        self.session.close()
