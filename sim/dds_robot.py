@@ -32,9 +32,10 @@ class DdsRobotConfig:
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
     """Serve the simulated robot until the duration ends or a stop signal comes; the counters as a report."""
-    from hw.dds import messages  # noqa: PLC0415 - MuJoCo and cyclonedds only here
+    from hw.dds import cdr, messages  # noqa: PLC0415 - MuJoCo and cyclonedds only here
     from hw.dds.session import DdsSession  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import G1LowLevel  # noqa: PLC0415
+    from hw.protocols.crc import FrameError  # noqa: PLC0415
     from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415
     from sim.robot import SimRobot  # noqa: PLC0415
     from sim.world import build_model  # noqa: PLC0415
@@ -47,7 +48,7 @@ def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
     robot = SimRobot(build_model(cfg.mjcf))
     session = DdsSession(cfg.dds)
-    published = 0
+    published = bad_frames = 0
     try:
         plant = MuJoCoPlant(robot)
         lowlevel = G1LowLevel(plant, cfg.lowlevel)
@@ -57,20 +58,22 @@ def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
         next_tick = start
         while not stop["requested"] and (cfg.duration_s is None or time.monotonic() - start < cfg.duration_s):
             now = plant.time()
-            for message in commands.take(N=8):
-                if isinstance(message, messages.LowCmd_):  # not the InvalidSample a writer that leaves sends
-                    lowlevel.receive(messages.low_cmd_to_record(message), now)
+            for data in DdsSession.take_cdr(commands):
+                try:
+                    lowlevel.receive(cdr.low_cmd_from_cdr(data), now)
+                except FrameError:
+                    bad_frames += 1
             lowlevel.tick(now)
             target = time.monotonic() - start
             while plant.time() < target:  # physics keeps up with the wall clock
                 plant.step()
-            states.write(messages.low_state_from_record(lowlevel.low_state()))
+            DdsSession.write_cdr(states, cdr.low_state_to_cdr(lowlevel.low_state()))
             published += 1
             next_tick += cfg.period_s
             time.sleep(max(0.0, next_tick - time.monotonic()))
         counters = lowlevel.counters
         return {
-            "states_published": published, "commands": counters.commands, "crc_errors": counters.crc_errors,
+            "states_published": published, "commands": counters.commands, "crc_errors": counters.crc_errors, "bad_frames": bad_frames,
             "mode_machine_mismatches": counters.mode_machine_mismatches, "timeouts": counters.timeouts,
             "sim_seconds": round(plant.time(), 3), "limp": lowlevel.limp, "limp_reason": lowlevel.limp_reason,
         }  # fmt: skip

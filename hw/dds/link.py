@@ -5,6 +5,7 @@ What the lifecycle robot builds on (configure, soft start, 500 Hz cycle, damping
 - `connect(timeout_s)`: wait for the robot's first `LowState_` with a good CRC and learn its
   `mode_machine` (every command must carry it), or fail naming the domain and interface.
 - `send(record)`: stamp `mode_machine` and the CRC on a `LowCmd_` record and publish it.
+  Messages go through `hw.dds.cdr` (numpy, microseconds), not Cyclone's Python serializer.
 - `poll(now)`: take what arrived, keep the newest state whose CRC matches (a bad one is
   counted, never used), and say how old the newest good state is (`age`): a robot whose
   state stops coming is stale, and the caller damps.
@@ -18,10 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hw.dds import messages
+from hw.dds import cdr, messages
 from hw.dds.session import DdsConfig, DdsSession
 from hw.errors import HardwareFault
 from hw.protocols import unitree_hg as hg
+from hw.protocols.crc import FrameError
 
 
 class RobotNotFoundError(HardwareFault):
@@ -33,6 +35,7 @@ class LinkCounters:
     commands_sent: int = 0
     states_received: int = 0  # with a good CRC
     crc_errors: int = 0  # states whose CRC did not match: dropped
+    bad_frames: int = 0  # samples that are no LowState_ (size, encapsulation): dropped
     mode_machine_changes: int = 0  # the robot reported another mode_machine than at connect
 
 
@@ -66,10 +69,12 @@ class DdsLink:
 
     def poll(self) -> float | None:
         """Take what arrived; the age (s) of the newest good state, None before the first."""
-        for sample in self._reader.take(N=16):
-            if not isinstance(sample, messages.LowState_):  # a writer leaving sends a sample without data
+        for data in DdsSession.take_cdr(self._reader):
+            try:
+                record = cdr.low_state_from_cdr(data)
+            except FrameError:
+                self.counters.bad_frames += 1
                 continue
-            record = messages.low_state_to_record(sample)
             if not hg.crc_ok(record):
                 self.counters.crc_errors += 1
                 continue
@@ -85,7 +90,7 @@ class DdsLink:
             raise HardwareFault("send before connect: the robot's mode_machine is not known yet")
         out = hg.canonical(record)
         out["mode_machine"] = self.mode_machine
-        self._writer.write(messages.low_cmd_from_record(hg.with_crc(out)))
+        DdsSession.write_cdr(self._writer, cdr.low_cmd_to_cdr(hg.with_crc(out)))
         self.counters.commands_sent += 1
 
     def close(self) -> None:

@@ -10,10 +10,12 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
 
+from hw.dds import cdr
 from hw.dds import messages as m
 from hw.dds.session import DdsConfig, DdsSession, domain_xml
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
+from hw.protocols.crc import FrameError
 
 
 def a_low_state() -> np.ndarray:
@@ -65,3 +67,48 @@ def test_a_low_cmd_crosses_loopback_dds() -> None:
         assert hg.crc_ok(record) and int(record["mode_machine"]) == 2 and float(record["motor_cmd"][0]["kp"]) == 40.0
     finally:
         session.close()
+
+
+def random_records(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    command = hg.new_low_cmd(mode_pr=1, mode_machine=int(rng.integers(0, 256)))
+    motors = command["motor_cmd"]
+    motors["mode"] = rng.integers(0, 256, 35)
+    for name in ("q", "dq", "tau", "kp", "kd"):
+        motors[name] = rng.normal(size=35)
+    motors["reserve"] = rng.integers(0, 2**32, 35, dtype=np.uint64)
+    command["reserve"] = rng.integers(0, 2**32, 4, dtype=np.uint64)
+    state = a_low_state()
+    state["version"], state["tick"] = rng.integers(0, 2**32, 2, dtype=np.uint64), int(rng.integers(0, 2**32))
+    for name in ("quaternion", "gyroscope", "accelerometer", "rpy"):
+        state["imu_state"][name] = rng.normal(size=state["imu_state"][name].shape)
+    state["imu_state"]["temperature"] = -7
+    ms = state["motor_state"]
+    ms["mode"] = rng.integers(0, 256, 35)
+    for name in ("q", "dq", "ddq", "tau_est", "vol"):
+        ms[name] = rng.normal(size=35)
+    ms["temperature"] = rng.integers(-100, 100, (35, 2))
+    ms["sensor"] = rng.integers(0, 2**32, (35, 2), dtype=np.uint64)
+    ms["motorstate"] = rng.integers(0, 2**32, 35, dtype=np.uint64)
+    ms["reserve"] = rng.integers(0, 2**32, (35, 4), dtype=np.uint64)
+    state["wireless_remote"] = rng.integers(0, 256, 40)
+    return hg.with_crc(command), hg.with_crc(state)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_numpy_cdr_is_byte_for_byte_cyclone_ddss(seed: int) -> None:
+    command, state = random_records(seed)
+    assert cdr.low_cmd_to_cdr(command) == m.low_cmd_from_record(command).serialize()  # 1004 bytes
+    assert cdr.low_state_to_cdr(state) == m.low_state_from_record(state).serialize()  # 2092 bytes
+    assert hg.canonical(cdr.low_cmd_from_cdr(cdr.low_cmd_to_cdr(command))).tobytes() == hg.canonical(command).tobytes()
+    assert hg.canonical(cdr.low_state_from_cdr(cdr.low_state_to_cdr(state))).tobytes() == hg.canonical(state).tobytes()
+    assert cdr.low_cmd_to_cdr(command)[4 + 2] == command["motor_cmd"]["mode"][0]  # the first mode right after the header bytes
+
+
+def test_a_short_or_big_endian_sample_is_refused() -> None:
+    command, _ = random_records(0)
+    data = cdr.low_cmd_to_cdr(command)
+    with pytest.raises(FrameError, match="LowCmd_ CDR must be 1004 bytes, got 1000"):
+        cdr.low_cmd_from_cdr(data[:1000])
+    with pytest.raises(FrameError, match="not plain little-endian CDR"):
+        cdr.low_cmd_from_cdr(b"\x00\x00\x00\x00" + data[4:])
