@@ -2,7 +2,7 @@
 
 Cyclone DDS's Python serializer walks the 35 nested motor structs field by field: 0.26 ms to
 serialize a `LowCmd_` and 0.77 ms to read a `LowState_`, half the 2 ms control cycle. These
-are fixed-size `@final` structs of primitives, so their CDR (XCDR1, little-endian) is a fixed
+are fixed-size `@final` structs of primitives (16-33 µs a message here), so their CDR (XCDR1, little-endian) is a fixed
 layout: a 4-byte encapsulation header, then every field aligned to its own size counted
 from the start of the body, with no padding at the end of a nested struct. It differs from
 the C layout only there: a motor's `mode` byte follows the previous motor's last word
@@ -58,76 +58,60 @@ _CMD_MODES = _modes_at(2, 28, hg.NUM_MOTORS)  # 2, 28, 56, ...
 _STATE_MODES = _modes_at(70, 56, hg.NUM_MOTORS)  # 70, 124, 180, ...
 
 
+def _cmd_fields(record: np.ndarray, body: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(record field, CDR body view) pairs of a `LowCmd_`, every field but the motors' `mode` bytes."""
+    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_CMD_MOTOR, buffer=body)
+    pairs = [(record["mode_pr"], body[0:1]), (record["mode_machine"], body[1:2])]
+    pairs += [(record["motor_cmd"][name], motors[name]) for name in _CMD_MOTOR.names or ()]
+    return [*pairs, (record["reserve"], body[980:996].view("<u4")), (record["crc"], body[996:1000].view("<u4"))]
+
+
+def _state_fields(record: np.ndarray, body: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(record field, CDR body view) pairs of a `LowState_`, every field but the motors' `mode` bytes."""
+    head = np.ndarray((), dtype=_STATE_HEAD, buffer=body)
+    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_STATE_MOTOR, buffer=body, offset=_STATE_MOTORS_AT)
+    tail = np.ndarray((), dtype=_STATE_TAIL, buffer=body, offset=_STATE_TAIL_AT)
+    imu = record["imu_state"]
+    pairs = [(record[name], head[name]) for name in ("version", "mode_pr", "mode_machine", "tick")]
+    pairs += [(imu[name], head[name]) for name in _IMU] + [(imu["temperature"], head["imu_temperature"])]
+    pairs += [(record["motor_state"][name], motors[name]) for name in _STATE_MOTOR.names or ()]
+    return pairs + [(record[name], tail[name]) for name in ("wireless_remote", "reserve", "crc")]
+
+
+def _encode(record: np.ndarray, size: int, fields: Any, motors: str, modes: np.ndarray) -> bytes:
+    body = np.zeros(size, dtype=np.uint8)
+    for source, target in fields(record, body):
+        target[...] = np.reshape(source, target.shape)
+    body[modes] = record[motors]["mode"]
+    return CDR_LE + body.tobytes()
+
+
+def _decode(body: np.ndarray, dtype: np.dtype[Any], fields: Any, motors: str, modes: np.ndarray) -> np.ndarray:
+    record = np.zeros((), dtype=dtype)
+    for target, source in fields(record, body):
+        target[...] = np.reshape(source, target.shape)
+    record[motors]["mode"] = body[modes]
+    return record
+
+
 def low_cmd_to_cdr(record: np.ndarray) -> bytes:
     """A `LowCmd_` record (CRC set) as the CDR the robot reads."""
-    body = np.zeros(LOW_CMD_BODY, dtype=np.uint8)
-    body[0], body[1] = record["mode_pr"], record["mode_machine"]
-    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_CMD_MOTOR, buffer=body)
-    source = record["motor_cmd"]
-    for name in _CMD_MOTOR.names or ():
-        motors[name] = source[name]
-    body[_CMD_MODES] = source["mode"]
-    body[980:996] = np.asarray(record["reserve"], dtype="<u4").view(np.uint8)
-    body[996:1000] = np.asarray(record["crc"], dtype="<u4").reshape(1).view(np.uint8)
-    return CDR_LE + body.tobytes()
+    return _encode(record, LOW_CMD_BODY, _cmd_fields, "motor_cmd", _CMD_MODES)
 
 
 def low_cmd_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowCmd_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    body = _body(data, LOW_CMD_BODY, "LowCmd_")
-    record = np.zeros((), dtype=hg.LOW_CMD)
-    record["mode_pr"], record["mode_machine"] = body[0], body[1]
-    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_CMD_MOTOR, buffer=body)
-    target = record["motor_cmd"]
-    for name in _CMD_MOTOR.names or ():
-        target[name] = motors[name]
-    target["mode"] = body[_CMD_MODES]
-    record["reserve"] = body[980:996].view("<u4")
-    record["crc"] = body[996:1000].view("<u4")[0]
-    return record
+    return _decode(_body(data, LOW_CMD_BODY, "LowCmd_"), hg.LOW_CMD, _cmd_fields, "motor_cmd", _CMD_MODES)
 
 
 def low_state_to_cdr(record: np.ndarray) -> bytes:
     """A `LowState_` record (CRC set) as the CDR the robot publishes."""
-    body = np.zeros(LOW_STATE_BODY, dtype=np.uint8)
-    head = np.ndarray((), dtype=_STATE_HEAD, buffer=body)
-    head["version"], head["mode_pr"], head["mode_machine"], head["tick"] = (
-        record["version"], record["mode_pr"], record["mode_machine"], record["tick"],
-    )  # fmt: skip
-    imu = record["imu_state"]
-    for name in _IMU:
-        head[name] = imu[name]
-    head["imu_temperature"] = imu["temperature"]
-    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_STATE_MOTOR, buffer=body, offset=_STATE_MOTORS_AT)
-    source = record["motor_state"]
-    for name in _STATE_MOTOR.names or ():
-        motors[name] = source[name]
-    body[_STATE_MODES] = source["mode"]
-    tail = np.ndarray((), dtype=_STATE_TAIL, buffer=body, offset=_STATE_TAIL_AT)
-    tail["wireless_remote"], tail["reserve"], tail["crc"] = record["wireless_remote"], record["reserve"], record["crc"]
-    return CDR_LE + body.tobytes()
+    return _encode(record, LOW_STATE_BODY, _state_fields, "motor_state", _STATE_MODES)
 
 
 def low_state_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowState_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    body = _body(data, LOW_STATE_BODY, "LowState_")
-    record = np.zeros((), dtype=hg.LOW_STATE)
-    head = np.ndarray((), dtype=_STATE_HEAD, buffer=body)
-    record["version"], record["mode_pr"], record["mode_machine"], record["tick"] = (
-        head["version"], head["mode_pr"], head["mode_machine"], head["tick"],
-    )  # fmt: skip
-    imu = record["imu_state"]
-    for name in _IMU:
-        imu[name] = head[name]
-    imu["temperature"] = head["imu_temperature"]
-    motors = np.ndarray((hg.NUM_MOTORS,), dtype=_STATE_MOTOR, buffer=body, offset=_STATE_MOTORS_AT)
-    target = record["motor_state"]
-    for name in _STATE_MOTOR.names or ():
-        target[name] = motors[name]
-    target["mode"] = body[_STATE_MODES]
-    tail = np.ndarray((), dtype=_STATE_TAIL, buffer=body, offset=_STATE_TAIL_AT)
-    record["wireless_remote"], record["reserve"], record["crc"] = tail["wireless_remote"], tail["reserve"], tail["crc"]
-    return record
+    return _decode(_body(data, LOW_STATE_BODY, "LowState_"), hg.LOW_STATE, _state_fields, "motor_state", _STATE_MODES)
 
 
 def _body(data: Any, size: int, what: str) -> np.ndarray:
