@@ -3,7 +3,9 @@
 The type names and fields are those of the robot's IDL (`unitree_hg::msg::dds_`, see
 `hw.protocols.unitree_hg`): a participant publishing these on `rt/lowcmd` is understood by the
 robot. DDS serializes them (CDR); the CRC is computed, as the robot does, over the C layout of
-the same fields, so every message goes through a numpy record (`to_record`, `from_record`).
+the same fields (numpy records). The control path writes and reads CDR straight from the
+records (`hw.dds.cdr`); the record conversions here go through Cyclone's own serializer and
+are the reference the tests hold `cdr` to.
 Needs the `g1` extra (`pip install -e '.[g1]'`: cyclonedds). No `from __future__ import
 annotations` here: cyclonedds reads the field types from the annotations themselves.
 """
