@@ -65,7 +65,7 @@ if LOW_CMD.itemsize != LOW_CMD_SIZE or LOW_STATE.itemsize != LOW_STATE_SIZE:  # 
 def message_crc(message: bytes | bytearray | memoryview) -> int:
     """The CRC of a packed message: every little-endian uint32 word but the last (the CRC's own)."""
     words = np.frombuffer(message, dtype="<u4", count=len(message) // 4 - 1)
-    return crc32_words(words.tolist())
+    return crc32_words(words)
 
 
 def new_low_cmd(mode_pr: int = 0, mode_machine: int = 0) -> np.ndarray:
