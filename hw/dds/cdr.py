@@ -78,40 +78,66 @@ def _state_fields(record: np.ndarray, body: np.ndarray) -> list[tuple[np.ndarray
     return pairs + [(record[name], tail[name]) for name in ("wireless_remote", "reserve", "crc")]
 
 
-def _encode(record: np.ndarray, size: int, fields: Any, motors: str, modes: np.ndarray) -> bytes:
+def _encode_by_fields(record: np.ndarray, size: int, fields: Any, motors: str, modes: np.ndarray) -> np.ndarray:
     body = np.zeros(size, dtype=np.uint8)
     for source, target in fields(record, body):
         target[...] = np.reshape(source, target.shape)
     body[modes] = record[motors]["mode"]
-    return CDR_LE + body.tobytes()
+    return body
 
 
-def _decode(body: np.ndarray, dtype: np.dtype[Any], fields: Any, motors: str, modes: np.ndarray) -> np.ndarray:
-    record = np.zeros((), dtype=dtype)
-    for target, source in fields(record, body):
-        target[...] = np.reshape(source, target.shape)
-    record[motors]["mode"] = body[modes]
-    return record
+def _byte_maps(dtype: np.dtype[Any], size: int, fields: Any, motors: str, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each CDR body byte comes from in the packed record, and the reverse; padding points one past the end (a zero).
+
+    Both layouts are fixed, so the conversion is a byte permutation: the field table is run once
+    on records whose bytes are their own positions (low, then high byte), and each message is
+    then one gather of about 2 kB (a few microseconds instead of a walk over the fields).
+    """
+    position = np.arange(dtype.itemsize)
+
+    def encoded(labels: np.ndarray) -> np.ndarray:
+        return _encode_by_fields(np.frombuffer(labels.astype(np.uint8).tobytes(), dtype=dtype).reshape(()), size, fields, motors, modes)
+
+    low, high, filled = encoded(position & 0xFF), encoded(position >> 8), encoded(np.full(dtype.itemsize, 0xFF))
+    to_cdr = np.where(filled == 0xFF, low.astype(np.int64) | (high.astype(np.int64) << 8), dtype.itemsize)
+    from_cdr = np.full(dtype.itemsize, size)
+    carried = to_cdr < dtype.itemsize
+    from_cdr[to_cdr[carried]] = np.flatnonzero(carried)
+    return to_cdr, from_cdr
+
+
+_CMD_TO_CDR, _CMD_FROM_CDR = _byte_maps(hg.LOW_CMD, LOW_CMD_BODY, _cmd_fields, "motor_cmd", _CMD_MODES)
+_STATE_TO_CDR, _STATE_FROM_CDR = _byte_maps(hg.LOW_STATE, LOW_STATE_BODY, _state_fields, "motor_state", _STATE_MODES)
+_ZERO = np.zeros(1, dtype=np.uint8)
+
+
+def _encode(record: np.ndarray, to_cdr: np.ndarray) -> bytes:
+    packed = np.concatenate((np.frombuffer(record.tobytes(), dtype=np.uint8), _ZERO))
+    return CDR_LE + packed[to_cdr].tobytes()
+
+
+def _decode(body: np.ndarray, dtype: np.dtype[Any], from_cdr: np.ndarray) -> np.ndarray:
+    return np.frombuffer(np.concatenate((body, _ZERO))[from_cdr].tobytes(), dtype=dtype).reshape(()).copy()
 
 
 def low_cmd_to_cdr(record: np.ndarray) -> bytes:
     """A `LowCmd_` record (CRC set) as the CDR the robot reads."""
-    return _encode(record, LOW_CMD_BODY, _cmd_fields, "motor_cmd", _CMD_MODES)
+    return _encode(record, _CMD_TO_CDR)
 
 
 def low_cmd_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowCmd_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    return _decode(_body(data, LOW_CMD_BODY, "LowCmd_"), hg.LOW_CMD, _cmd_fields, "motor_cmd", _CMD_MODES)
+    return _decode(_body(data, LOW_CMD_BODY, "LowCmd_"), hg.LOW_CMD, _CMD_FROM_CDR)
 
 
 def low_state_to_cdr(record: np.ndarray) -> bytes:
     """A `LowState_` record (CRC set) as the CDR the robot publishes."""
-    return _encode(record, LOW_STATE_BODY, _state_fields, "motor_state", _STATE_MODES)
+    return _encode(record, _STATE_TO_CDR)
 
 
 def low_state_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowState_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    return _decode(_body(data, LOW_STATE_BODY, "LowState_"), hg.LOW_STATE, _state_fields, "motor_state", _STATE_MODES)
+    return _decode(_body(data, LOW_STATE_BODY, "LowState_"), hg.LOW_STATE, _STATE_FROM_CDR)
 
 
 def _body(data: Any, size: int, what: str) -> np.ndarray:

@@ -22,6 +22,7 @@ with `mode` 1 is enabled. Pure functions on bytes and numpy records; no DDS here
 
 from __future__ import annotations
 
+import functools
 import struct
 from dataclasses import dataclass
 from typing import Any
@@ -81,9 +82,18 @@ def canonical(record: np.ndarray) -> np.ndarray:
     The CRC covers the padding too, and numpy's own copies of aligned records leave it
     uninitialized: every record that is packed or checked goes through here.
     """
-    out = np.zeros((), dtype=record.dtype)
-    _copy_fields(out, np.asarray(record), record.dtype)
-    return out
+    data = np.frombuffer(np.asarray(record).tobytes(), dtype=np.uint8).copy()
+    data[_padding(record.dtype)] = 0
+    return data.view(record.dtype).reshape(())
+
+
+@functools.cache
+def _padding(dtype: np.dtype[Any]) -> np.ndarray:
+    """Byte mask of the padding of a record type: what a leaf-by-leaf copy into zeros leaves zero."""
+    full = np.frombuffer(b"\xff" * dtype.itemsize, dtype=dtype).reshape(())
+    leaves = np.zeros((), dtype=dtype)
+    _copy_fields(leaves, full, dtype)
+    return np.frombuffer(leaves.tobytes(), dtype=np.uint8) == 0
 
 
 def _copy_fields(dst: np.ndarray, src: np.ndarray, dtype: np.dtype[Any]) -> None:
