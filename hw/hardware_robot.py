@@ -12,7 +12,6 @@ bus, collects the replies and runs the feedback checks. The controller only call
 
 from __future__ import annotations
 
-import enum
 import logging
 import math
 import time
@@ -27,21 +26,12 @@ from hw.feedback import FeedbackStore, MitReplyBank, MotorFeedback
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
 from hw.protocols import mit
-from hw.robot import RobotInterface
+from hw.robot import Lifecycle, RobotInterface
 from hw.safety import JointLimits, command_is_finite, feedback_faults, limit_command
 from hw.transport import open_can, open_serial
 from hw.types import JointCommand, RobotState
 
 log = logging.getLogger(__name__)
-
-
-class Lifecycle(enum.Enum):
-    UNCONFIGURED = "unconfigured"
-    INACTIVE = "inactive"
-    ACTIVATING = "activating"
-    ACTIVE = "active"
-    ERROR = "error"
-    CLOSED = "closed"
 
 
 class HardwareRobot(RobotInterface):

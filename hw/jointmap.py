@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from hw.dds.config import DdsHardwareConfig, dds_config_from, is_dds_config
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, EFFORT_LIMITS, JOINT_NAMES
 from hw.protocols.mit import MitRanges
@@ -133,8 +134,23 @@ def hardware_config_path(name_or_path: str) -> Path:
 
 
 def load_hardware_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig:
+    """A bus config (CAN, serial); a DDS config is refused in one line naming the commands that take it."""
+    cfg = load_robot_config(name_or_path, expected_joints)
+    if isinstance(cfg, DdsHardwareConfig):
+        raise ConfigError(
+            f"hardware config '{name_or_path}' is a G1 over DDS: this command drives CAN/serial buses; "
+            "'g1ctl sim', 'g1ctl run', 'g1ctl hw' and 'g1ctl bench dds' take DDS configs"
+        )
+    return cfg
+
+
+def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> HardwareConfig | DdsHardwareConfig:
+    """Any hardware config: buses with a joint map (`HardwareConfig`), or a G1 over DDS (`transport: dds`)."""
     path = hardware_config_path(name_or_path)
-    cfg = from_dict(HardwareConfig, with_g1_torque_limits(load_yaml(path)), str(path))
+    data = load_yaml(path)
+    if is_dds_config(data):
+        return dds_config_from(data, str(path), expected_joints)
+    cfg = from_dict(HardwareConfig, with_g1_torque_limits(data), str(path))
     validate(cfg, str(path), expected_joints, load_motor_models())
     return cfg
 

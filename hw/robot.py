@@ -3,11 +3,23 @@
 from __future__ import annotations
 
 import abc
+import enum
 import warnings
 from types import TracebackType
 from typing import Self
 
 from hw.types import JointCommand, RobotState
+
+
+class Lifecycle(enum.Enum):
+    """States of a hardware robot (ros2_control's lifecycle): see `hw.hardware_robot` and `hw.dds.robot`."""
+
+    UNCONFIGURED = "unconfigured"
+    INACTIVE = "inactive"
+    ACTIVATING = "activating"
+    ACTIVE = "active"
+    ERROR = "error"
+    CLOSED = "closed"
 
 
 class RobotInterface(abc.ABC):

@@ -8,10 +8,12 @@ a bus fault, a stale IMU, a non-finite target. Any fault latches damping on all 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from hw.dds.config import DdsJointConfig
 from hw.jointmap import JointConfig, SafetyConfig
 from hw.types import FloatArray, JointCommand
 
@@ -26,7 +28,7 @@ class JointLimits:
     tau_max: FloatArray
 
     @staticmethod
-    def from_joint_map(names: tuple[str, ...], joints: dict[str, JointConfig]) -> JointLimits:
+    def from_joint_map(names: tuple[str, ...], joints: Mapping[str, JointConfig | DdsJointConfig]) -> JointLimits:
         return JointLimits(
             q_min=np.array([joints[n].position_limits[0] for n in names]),
             q_max=np.array([joints[n].position_limits[1] for n in names]),

@@ -1,15 +1,26 @@
 """A simulated G1 in its own process that speaks the robot's DDS protocol: `g1ctl robot --dds`.
 
 MuJoCo physics with the G1's PD servos behind the emulated low-level controller
-(`hw.emulation.g1_lowlevel`), paced to the wall clock: every `period_s` it takes the
-`LowCmd_`s that arrived on `rt/lowcmd`, steps the physics to the wall time, and publishes a
-`LowState_` on `rt/lowstate` (the remote's bytes included). Like the robot it starts limp and
-goes limp on a bad command or a command gap. It stops after `duration_s` or on SIGTERM/SIGINT,
-and reports what it counted.
+(`hw.emulation.g1_lowlevel`), paced to the wall clock: every `period_s` it takes the `LowCmd_`s
+that arrived on `rt/lowcmd`, steps the physics to the wall time, and publishes a `LowState_` on
+`rt/lowstate`. Like the robot:
+
+- It boots with a high-level mode active (`motion_mode`, "ai"): until a host releases it over
+  `motion_switcher` (`hw.dds.motion_switcher`) every `LowCmd_` is refused and counted.
+- It goes limp on a bad command or a command gap.
+
+Unlike the robot, its physics waits for the first command it takes: the G1 stands still in its
+default pose until then (the real one would stand under its own controller, or hang on a
+gantry), so a host that takes seconds to start finds it standing. With `truth` it also
+publishes its ground truth on `sim/truth` (for a run's metrics, `sim.dds_truth`); with
+`lockstep` it answers every command at once with the newest state (the benchmark's round
+trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run. It stops after
+`duration_s` or on SIGTERM/SIGINT and reports what it counted.
 """
 
 from __future__ import annotations
 
+import os
 import signal
 import time
 from dataclasses import dataclass, field
@@ -18,7 +29,10 @@ from types import FrameType
 from typing import Any
 
 from hw.dds.session import DdsConfig
+from hw.emulation.g1_faults import RobotFault
 from hw.emulation.g1_lowlevel import LowLevelConfig
+
+TRUTH_EVERY = 5  # ticks between ground-truth samples (100 Hz at a 2 ms period)
 
 
 @dataclass(frozen=True)
@@ -28,57 +42,143 @@ class DdsRobotConfig:
     lowlevel: LowLevelConfig = field(default_factory=LowLevelConfig)
     period_s: float = 0.002  # LowState_ every 2 ms, as the robot publishes it
     duration_s: float | None = None  # None: until stopped
+    motion_mode: str = "ai"  # the high-level mode active at boot; "": released, low-level commands taken at once
+    truth: bool = False  # publish the simulator's state on sim/truth
+    lockstep: bool = False  # answer each LowCmd_ with a LowState_ at once (benchmarks)
+    faults: tuple[RobotFault, ...] = ()
 
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
     """Serve the simulated robot until the duration ends or a stop signal comes; the counters as a report."""
-    from hw.dds import cdr, messages  # noqa: PLC0415 - MuJoCo and cyclonedds only here
-    from hw.dds.session import DdsSession  # noqa: PLC0415
-    from hw.emulation.g1_lowlevel import G1LowLevel  # noqa: PLC0415
-    from hw.protocols.crc import FrameError  # noqa: PLC0415
-    from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415
-    from sim.robot import SimRobot  # noqa: PLC0415
-    from sim.world import build_model  # noqa: PLC0415
-
     stop = {"requested": False}
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
         stop["requested"] = True
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
-    robot = SimRobot(build_model(cfg.mjcf))
-    session = DdsSession(cfg.dds)
-    published = bad_frames = 0
+    server = _Server(cfg)
     try:
-        plant = MuJoCoPlant(robot)
-        lowlevel = G1LowLevel(plant, cfg.lowlevel)
-        commands = session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
-        states = session.writer(cfg.dds.lowstate_topic, messages.LowState_)
         start = time.monotonic()
-        next_tick = start
         while not stop["requested"] and (cfg.duration_s is None or time.monotonic() - start < cfg.duration_s):
-            now = plant.time()
-            for data in DdsSession.take_cdr(commands):
-                try:
-                    lowlevel.receive(cdr.low_cmd_from_cdr(data), now)
-                except FrameError:
-                    bad_frames += 1
-            lowlevel.tick(now)
-            target = time.monotonic() - start
-            while plant.time() < target:  # physics keeps up with the wall clock
-                plant.step()
-            DdsSession.write_cdr(states, cdr.low_state_to_cdr(lowlevel.low_state()))
-            published += 1
-            next_tick += cfg.period_s
-            time.sleep(max(0.0, next_tick - time.monotonic()))
-        counters = lowlevel.counters
-        return {
-            "states_published": published, "commands": counters.commands, "crc_errors": counters.crc_errors, "bad_frames": bad_frames,
-            "mode_machine_mismatches": counters.mode_machine_mismatches, "timeouts": counters.timeouts,
-            "sim_seconds": round(plant.time(), 3), "limp": lowlevel.limp, "limp_reason": lowlevel.limp_reason,
-        }  # fmt: skip
+            server.tick()
+        return server.report()
     finally:
-        session.close()
-        robot.close()
+        server.close()
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+class _Server:
+    """The robot's loop, one `tick()` per period (lock-step: per command, or per period without one)."""
+
+    def __init__(self, cfg: DdsRobotConfig) -> None:
+        from hw.dds import messages  # noqa: PLC0415 - MuJoCo and cyclonedds only here
+        from hw.dds.motion_switcher import MotionSwitcherService  # noqa: PLC0415
+        from hw.dds.session import DdsSession  # noqa: PLC0415
+        from hw.emulation.g1_lowlevel import G1LowLevel  # noqa: PLC0415
+        from sim.dds_truth import TRUTH_TOPIC, SimTruth_  # noqa: PLC0415
+        from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415
+        from sim.robot import SimRobot  # noqa: PLC0415
+        from sim.world import build_model  # noqa: PLC0415
+
+        self.cfg = cfg
+        self.robot = SimRobot(build_model(cfg.mjcf))
+        self.session = DdsSession(cfg.dds)
+        self.plant = MuJoCoPlant(self.robot)
+        self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel)
+        self.commands = self.session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
+        self.states = self.session.writer(cfg.dds.lowstate_topic, messages.LowState_)
+        self.command_arrived = self.session.wait_set(self.commands)
+        self.motion = MotionSwitcherService(self.session, cfg.motion_mode)
+        self._truth_type = SimTruth_
+        self.truth = self.session.writer(TRUTH_TOPIC, SimTruth_) if cfg.truth else None
+        self.published = self.bad_frames = self.refused = self.ticks = 0
+        self.physics_start: float | None = None  # wall time of the first command taken: the physics runs from then
+        self.boot = self.next_tick = time.monotonic()
+        self.faults_seen: set[str] = set()
+        self.state_cdr = self._sample()
+
+    def tick(self) -> None:
+        from hw.dds import cdr  # noqa: PLC0415
+        from hw.dds.session import DdsSession  # noqa: PLC0415
+        from hw.protocols.crc import FrameError  # noqa: PLC0415
+
+        if self.cfg.lockstep:
+            self.command_arrived(max(self.next_tick - time.monotonic(), 0.0))
+        now = self.plant.time()
+        self.motion.poll()  # under a microsecond when no request waits
+        taken = DdsSession.take_cdr(self.commands)
+        if taken and self.cfg.lockstep:
+            self._publish()  # the state sampled before this command: a robot's sensors do not wait for the host
+        for data in taken:
+            if self.motion.mode:  # the high-level controller owns the motors: a host's command is refused
+                self.refused += 1
+                continue
+            try:
+                self.lowlevel.receive(cdr.low_cmd_from_cdr(data), now)
+            except FrameError:
+                self.bad_frames += 1
+        if self.physics_start is None and self.lowlevel.counters.commands:
+            self.physics_start = time.monotonic()
+        self.lowlevel.tick(now)
+        if self.physics_start is not None:
+            target = time.monotonic() - self.physics_start
+            while self.plant.time() < target:  # physics keeps up with the wall clock
+                self.plant.step()
+        if "exit" in self._faults():
+            os._exit(3)  # the robot process dies: no report, no goodbye on the wire
+        self.state_cdr = self._sample()
+        if taken and self.cfg.lockstep:
+            return
+        self._publish()
+        self.next_tick += self.cfg.period_s
+        if not self.cfg.lockstep:
+            time.sleep(max(0.0, self.next_tick - time.monotonic()))
+        elif time.monotonic() > self.next_tick + self.cfg.period_s:
+            self.boot = self.next_tick = time.monotonic()
+
+    def _faults(self) -> frozenset[str]:
+        from hw.emulation.g1_faults import active  # noqa: PLC0415
+
+        since = None if self.physics_start is None else time.monotonic() - self.physics_start
+        kinds = active(self.cfg.faults, since)
+        self.faults_seen |= kinds
+        if "mode-machine" in kinds:
+            self.lowlevel.mode_machine = (self.cfg.lowlevel.mode_machine + 1) & 0xFF
+        return kinds
+
+    def _sample(self) -> bytes | None:
+        """The `LowState_` to publish now as CDR (None: a stale robot publishes nothing); truth on its own period."""
+        from hw.dds import cdr  # noqa: PLC0415
+        from hw.emulation.g1_faults import tamper  # noqa: PLC0415
+
+        self.ticks += 1
+        if self.truth is not None and self.ticks % TRUTH_EVERY == 0:
+            data = self.robot.data
+            self.truth.write(self._truth_type(float(data.time), data.qpos.tolist(), data.qvel.tolist()))
+        kinds = self._faults()
+        if "stale" in kinds:
+            return None
+        uptime = time.monotonic() - self.boot
+        return cdr.low_state_to_cdr(tamper(self.lowlevel.low_state(uptime_s=uptime), kinds))
+
+    def _publish(self) -> None:
+        from hw.dds.session import DdsSession  # noqa: PLC0415
+
+        if self.state_cdr is not None:
+            DdsSession.write_cdr(self.states, self.state_cdr)
+            self.published += 1
+
+    def report(self) -> dict[str, Any]:
+        counters = self.lowlevel.counters
+        return {
+            "states_published": self.published, "commands": counters.commands, "crc_errors": counters.crc_errors,
+            "bad_frames": self.bad_frames, "mode_machine_mismatches": counters.mode_machine_mismatches, "timeouts": counters.timeouts,
+            "sim_seconds": round(self.plant.time(), 3), "limp": self.lowlevel.limp, "limp_reason": self.lowlevel.limp_reason,
+            "motion_mode": self.motion.mode, "motion_release_requests": self.motion.counters.release_requests,
+            "commands_while_high_level": self.refused, "faults": sorted(self.faults_seen),
+        }  # fmt: skip
+
+    def close(self) -> None:
+        self.session.close()
+        self.robot.close()

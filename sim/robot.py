@@ -107,6 +107,11 @@ class SimRobot(RobotInterface):
         if n > 0:
             self.step(n)
 
+    def mirror(self, qpos: FloatArray, qvel: FloatArray, time: float) -> None:
+        """Take another simulator's state (a robot in another process) without stepping: positions, velocities, kinematics."""
+        self.data.qpos[:], self.data.qvel[:], self.data.time = qpos, qvel, time
+        mujoco.mj_forward(self.model, self.data)
+
     def has_fallen(self) -> bool:
         if self.data.qpos[2] < self.fall.min_pelvis_height:
             return True

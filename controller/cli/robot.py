@@ -1,10 +1,12 @@
-"""`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5]`: a simulated G1 that speaks DDS."""
+"""`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5] [--motion-mode ai]
+[--truth] [--lockstep] [--fault KIND@SECONDS ...]`: a simulated G1 in its own process on the robot's DDS topics."""
 
 from __future__ import annotations
 
 import argparse
 import json
 
+from hw.emulation.g1_faults import KINDS, RobotFault
 from hw.errors import ConfigError
 
 
@@ -15,6 +17,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     robot.add_argument("--interface", default="lo", help="network interface")
     robot.add_argument("--duration", type=float, default=None, help="seconds to run (default: until stopped)")
     robot.add_argument("--mode-machine", type=int, default=5, help="the robot type code it reports in LowState_")
+    robot.add_argument("--motion-mode", default="ai", help="high-level mode at boot: LowCmd_ refused until a host releases it ('': none)")
+    robot.add_argument("--truth", action="store_true", help="also publish the simulator's state on sim/truth (for a run's metrics)")
+    robot.add_argument("--lockstep", action="store_true", help="answer every LowCmd_ at once with a LowState_ (benchmarks)")
+    robot.add_argument(
+        "--fault", action="append", default=[], metavar="KIND@SECONDS",
+        help=f"develop a fault this long after the first command ({', '.join(KINDS)}); repeatable",
+    )  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,7 +36,8 @@ def run(args: argparse.Namespace) -> int:
 
     cfg = DdsRobotConfig(
         mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, dds=DdsConfig(domain=args.domain, interface=args.interface),
-        lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration,
+        lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration, motion_mode=args.motion_mode,
+        truth=args.truth, lockstep=args.lockstep, faults=tuple(RobotFault.parse(f) for f in args.fault),
     )  # fmt: skip
     print(json.dumps(run_dds_robot(cfg)))
     return 0

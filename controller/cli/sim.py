@@ -74,7 +74,8 @@ def run_and_summarize(cfg: SimRunConfig) -> int:
         print(f"report: {cfg.report}")
     if "hw" in report:
         hw = report["hw"]
-        print(json.dumps({"hw": {k: hw[k] for k in ("cycle_ms", "frames_sent", "frames_received", "dropped", "crc_errors", "faults")}}))
+        keys = ("cycle_ms", "frames_sent", "frames_received", "dropped", "commands_sent", "states_received", "crc_errors", "faults")
+        print(json.dumps({"hw": {k: hw[k] for k in keys if k in hw}}))
     if report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"):
         print(f"g1ctl: run ended damped at {report['damp_time']} s: {report['damp_reason']}", file=sys.stderr)
         return 1

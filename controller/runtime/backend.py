@@ -17,6 +17,7 @@ from hw.types import RobotState
 
 class Backend(abc.ABC):
     robot: RobotInterface  # what the controller reads and writes
+    paced_on_wall_clock = False  # True: `advance_to` waits for the wall clock itself (a robot that runs on its own)
 
     def start(self) -> None:  # noqa: B027 - optional: most backends are ready once built
         """Bring the robot up (hardware: configure, soft start); a fault here ends the run like any other."""

@@ -40,6 +40,21 @@ class WallClock(Clock):
             time.sleep(delay)
 
 
+class RunClock(WallClock):
+    """The wall clock counting from its creation: a run's time line when the robot runs on its own (a real robot)."""
+
+    def __init__(self) -> None:
+        self._start = time.monotonic()
+
+    def now(self) -> float:
+        return time.monotonic() - self._start
+
+    def sleep_until(self, deadline: float) -> None:
+        delay = deadline - self.now()
+        if delay > 0:
+            time.sleep(delay)
+
+
 class FakeClock(Clock):
     """A clock tests move by hand; `sleep_until` jumps to the deadline."""
 

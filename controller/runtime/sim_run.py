@@ -31,8 +31,9 @@ from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend, SimulatedHardwareBackend
 from controller.runtime.status import StatusLine
 from controller.tracking.registry import TrackerSpec, make_tracker
+from hw.dds.config import DdsHardwareConfig
 from hw.errors import ConfigError, HardwareFault, RunAborted
-from hw.jointmap import load_hardware_config
+from hw.jointmap import load_robot_config
 from sim.robot import SimRobot
 from sim.world import build_model
 
@@ -83,7 +84,9 @@ def _check(cfg: SimRunConfig) -> float | None:
     check_input(cfg.input)
     scenario = load_scenario(cfg.scenario) if cfg.input == "scripted" else None
     if cfg.hardware is not None:
-        load_hardware_config(cfg.hardware)
+        hardware = load_robot_config(cfg.hardware)
+        if isinstance(hardware, DdsHardwareConfig) and cfg.faults is not None:
+            raise ConfigError("--faults injects faults into simulated buses; a DDS config has none (its drills are in the tests)")
     elif cfg.faults is not None:
         raise ConfigError("--faults needs --hardware: faults are injected into simulated hardware")
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
@@ -152,11 +155,12 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
     tracker = make_tracker(tracker_name, TrackerSpec(cfg.policy, assets, robot.joint_names))
     if tracker.needs_plan and not cfg.planner:
         raise ConfigError(f"the {tracker.name} tracker follows planned whole-body motion: add --planner")
-    backend: Backend = DirectSimBackend(robot) if cfg.hardware is None else SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
+    backend = _backend(cfg, robot)
     stack.callback(backend.close)
     source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
-    realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer
-    clock = (RealtimeSimulationClock if realtime else SimulationClock)(backend.now, backend.advance_to)
+    wall_paced = backend.paced_on_wall_clock  # a robot in another process: its time is the wall's
+    realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer or wall_paced
+    clock = (RealtimeSimulationClock if realtime and not wall_paced else SimulationClock)(backend.now, backend.advance_to)
     recorder = viewer = None
     if cfg.video is not None:
         from sim.render import VideoRecorder  # noqa: PLC0415 - rendering is optional
@@ -197,6 +201,18 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
         status = StatusLine(sys.stderr)
         stack.callback(status.close)
     return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost, status, hooks)
+
+
+def _backend(cfg: SimRunConfig, robot: SimRobot) -> Backend:
+    """MuJoCo directly, simulated buses with MuJoCo behind them, or the simulated G1 in its own process over DDS."""
+    if cfg.hardware is None:
+        return DirectSimBackend(robot)
+    hardware = load_robot_config(cfg.hardware)
+    if isinstance(hardware, DdsHardwareConfig):
+        from controller.runtime.dds_backend import SimulatedDdsBackend  # noqa: PLC0415 - the g1 extra
+
+        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir)
+    return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:

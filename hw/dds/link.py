@@ -37,6 +37,7 @@ class LinkCounters:
     crc_errors: int = 0  # states whose CRC did not match: dropped
     bad_frames: int = 0  # samples that are no LowState_ (size, encapsulation): dropped
     mode_machine_changes: int = 0  # the robot reported another mode_machine than at connect
+    bad_in_a_row: int = 0  # states with a bad CRC since the last good one
 
 
 class DdsLink:
@@ -48,6 +49,7 @@ class DdsLink:
         self.session = DdsSession(cfg)
         self._writer = self.session.writer(cfg.lowcmd_topic, messages.LowCmd_)
         self._reader = self.session.reader(cfg.lowstate_topic, messages.LowState_)
+        self._arrived = self.session.wait_set(self._reader)
         self.counters = LinkCounters()
         self.mode_machine: int | None = None
         self.state: np.ndarray | None = None  # the newest LowState_ record with a good CRC
@@ -77,20 +79,36 @@ class DdsLink:
                 continue
             if not hg.crc_ok(record):
                 self.counters.crc_errors += 1
+                self.counters.bad_in_a_row += 1
                 continue
             self.counters.states_received += 1
+            self.counters.bad_in_a_row = 0
             if self.mode_machine is not None and int(record["mode_machine"]) != self.mode_machine:
                 self.counters.mode_machine_changes += 1
             self.state, self.state_time = record, self.clock()
         return None if self.state is None else self.clock() - self.state_time
 
+    def wait(self, timeout_s: float) -> None:
+        """Block until a `LowState_` is waiting (at most `timeout_s`): the benchmark's round trip waits on the answer."""
+        self._arrived(timeout_s)
+
     def send(self, record: np.ndarray) -> None:
         """Publish a `LowCmd_` record with the robot's `mode_machine` and the CRC set."""
+        self.send_cdr(self.encode(record))
+
+    def encode(self, record: np.ndarray) -> bytes:
+        """A `LowCmd_` record as the CDR `send_cdr` publishes: the robot's `mode_machine` and the CRC stamped.
+
+        Apart from `send` so that a command that does not change is encoded once and re-sent.
+        """
         if self.mode_machine is None:
             raise HardwareFault("send before connect: the robot's mode_machine is not known yet")
         out = hg.canonical(record)
         out["mode_machine"] = self.mode_machine
-        DdsSession.write_cdr(self._writer, cdr.low_cmd_to_cdr(hg.with_crc(out)))
+        return cdr.low_cmd_to_cdr(hg.with_crc(out))
+
+    def send_cdr(self, data: bytes) -> None:
+        DdsSession.write_cdr(self._writer, data)
         self.counters.commands_sent += 1
 
     def close(self) -> None:

@@ -9,6 +9,7 @@ only delay the next one.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 from xml.sax.saxutils import quoteattr
@@ -43,6 +44,22 @@ def domain_xml(cfg: DdsConfig) -> str:
     )
 
 
+_DOMAINS: dict[int, tuple[str, Any]] = {}  # domain id -> (its XML, the Domain): Cyclone takes one configuration per domain and process
+
+
+def _joined_domain(cfg: DdsConfig, domain_type: Any) -> Any:
+    """The process's `Domain` for `cfg.domain`, created on first use; a second session on it shares it (same interface and peers)."""
+    xml = domain_xml(cfg)
+    if cfg.domain in _DOMAINS:
+        joined_xml, domain = _DOMAINS[cfg.domain]
+        if joined_xml != xml:
+            raise ConfigError(f"DDS domain {cfg.domain} is already joined in this process with another interface or peers")
+        return domain
+    domain = domain_type(cfg.domain, xml)
+    _DOMAINS[cfg.domain] = (xml, domain)
+    return domain
+
+
 class DdsSession:
     """One participant; `writer(topic, type)` and `reader(topic, type)` with the control QoS. `close()` releases it."""
 
@@ -55,12 +72,13 @@ class DdsSession:
         self._domain: Any = None
         self.participant: Any = None
         try:
-            self._domain = Domain(cfg.domain, domain_xml(cfg))
+            self._domain = _joined_domain(cfg, Domain)
             self.participant = DomainParticipant(cfg.domain)
         except Exception as exc:  # cyclonedds raises its own DDSException: name the config that failed
             raise ConfigError(f"cannot join DDS domain {cfg.domain} on interface '{cfg.interface}': {exc}") from exc
         self._qos = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
         self._topics: dict[str, Any] = {}
+        self._waitsets: list[Any] = []
 
     def _topic(self, name: str, datatype: type) -> Any:
         from cyclonedds.topic import Topic  # noqa: PLC0415
@@ -69,15 +87,29 @@ class DdsSession:
             self._topics[name] = Topic(self.participant, name, datatype)
         return self._topics[name]
 
-    def writer(self, topic: str, datatype: type) -> Any:
+    def writer(self, topic: str, datatype: type, qos: Any = None) -> Any:
+        """A writer with the control QoS, or `qos` (a `cyclonedds.core.Qos`) where a topic needs another."""
         from cyclonedds.pub import DataWriter  # noqa: PLC0415
 
-        return DataWriter(self.participant, self._topic(topic, datatype), qos=self._qos)
+        return DataWriter(self.participant, self._topic(topic, datatype), qos=self._qos if qos is None else qos)
 
-    def reader(self, topic: str, datatype: type) -> Any:
+    def reader(self, topic: str, datatype: type, qos: Any = None) -> Any:
         from cyclonedds.sub import DataReader  # noqa: PLC0415
 
-        return DataReader(self.participant, self._topic(topic, datatype), qos=self._qos)
+        return DataReader(self.participant, self._topic(topic, datatype), qos=self._qos if qos is None else qos)
+
+    def wait_set(self, reader: Any) -> Callable[[float], None]:
+        """A function that blocks until `reader` has a sample, or the timeout (s) passes."""
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet  # noqa: PLC0415
+
+        waitset = WaitSet(self.participant)
+        waitset.attach(ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any))
+        self._waitsets.append(waitset)
+
+        def wait(timeout_s: float) -> None:
+            waitset.wait(max(int(timeout_s * 1e9), 0))
+
+        return wait
 
     @staticmethod
     def write_cdr(writer: Any, data: bytes) -> None:
@@ -102,5 +134,6 @@ class DdsSession:
     def close(self) -> None:
         """Drop the participant (its readers and writers with it)."""
         self._topics.clear()
+        self._waitsets.clear()
         self.participant = None
         self._domain = None

@@ -59,6 +59,7 @@ class G1LowLevel:
         self._command: np.ndarray | None = None  # the last valid LowCmd_ record
         self._last_valid: float | None = None
         self._start = plant.time()
+        self.mode_machine = cfg.mode_machine  # the robot's type code now (a drill may change it)
 
     def receive(self, record: np.ndarray, now: float) -> None:
         """A `LowCmd_` record as it came off the wire."""
@@ -66,9 +67,9 @@ class G1LowLevel:
             self.counters.crc_errors += 1
             self._go_limp("a LowCmd_ with a bad CRC")
             return
-        if int(record["mode_machine"]) != self.cfg.mode_machine:
+        if int(record["mode_machine"]) != self.mode_machine:
             self.counters.mode_machine_mismatches += 1
-            self._go_limp(f"a LowCmd_ for mode_machine {int(record['mode_machine'])} (this robot is {self.cfg.mode_machine})")
+            self._go_limp(f"a LowCmd_ for mode_machine {int(record['mode_machine'])} (this robot is {self.mode_machine})")
             return
         self.counters.commands += 1
         self._command, self._last_valid, self.limp_reason = record, now, None
@@ -95,11 +96,12 @@ class G1LowLevel:
     def limp(self) -> bool:
         return self._command is None
 
-    def low_state(self, remote: bytes = bytes(40)) -> np.ndarray:
-        """The `LowState_` the robot publishes now (CRC set)."""
+    def low_state(self, remote: bytes = bytes(40), uptime_s: float | None = None) -> np.ndarray:
+        """The `LowState_` the robot publishes now (CRC set); `tick` counts milliseconds of `uptime_s` (default: the plant's time)."""
         record = np.zeros((), dtype=hg.LOW_STATE)
-        record["mode_machine"] = self.cfg.mode_machine
-        record["tick"] = round((self.plant.time() - self._start) * 1000.0) & 0xFFFFFFFF
+        record["mode_machine"] = self.mode_machine
+        uptime = self.plant.time() - self._start if uptime_s is None else uptime_s
+        record["tick"] = round(uptime * 1000.0) & 0xFFFFFFFF
         with self.plant.lock:
             quaternion, gyro, accel = self.plant.imu_reading()
             states = [self.plant.joint_state(joint) for joint in g1.JOINT_NAMES]

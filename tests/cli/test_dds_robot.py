@@ -1,4 +1,4 @@
-"""`g1ctl robot --dds` in its own process: it publishes valid LowState_ on loopback DDS and refuses a bad LowCmd_."""
+"""`g1ctl robot --dds` in its own process: valid LowState_ on loopback DDS, a bad LowCmd_ refused, every one until "ai" is released."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not insta
 
 from hw.dds import messages as m
 from hw.dds.link import DdsLink, RobotNotFoundError
+from hw.dds.motion_switcher import release_motion_service
 from hw.dds.session import DdsConfig, DdsSession
 from hw.protocols import unitree_hg as hg
 
@@ -24,7 +25,7 @@ DOMAIN = 100 + os.getpid() % 100  # its own domain: two test runs on one machine
 
 def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> None:
     child = subprocess.Popen(
-        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(DOMAIN), "--duration", "6"],
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(DOMAIN), "--duration", "6", "--motion-mode", ""],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     session = DdsSession(DdsConfig(domain=DOMAIN, interface="lo"))
@@ -59,7 +60,7 @@ def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> 
     assert report["timeouts"] >= 1 and report["limp"]  # the commands stopped: limp again, as the robot would
 
 
-def test_the_host_link_connects_learns_mode_machine_and_holds_a_joint() -> None:
+def test_the_host_link_connects_releases_the_motion_service_and_holds_a_joint() -> None:
     domain = (DOMAIN + 50) % 233
     lonely = DdsLink(DdsConfig(domain=(domain + 1) % 233, interface="lo"))
     try:
@@ -79,6 +80,10 @@ def test_the_host_link_connects_learns_mode_machine_and_holds_a_joint() -> None:
         knee = 3  # left_knee_joint
         command["motor_cmd"]["mode"][knee], command["motor_cmd"]["q"][knee] = 1, 0.6
         command["motor_cmd"]["kp"][knee], command["motor_cmd"]["kd"][knee] = 60.0, 2.0
+        for _ in range(20):  # the robot's "ai" mode owns the motors: refused
+            link.send(command)
+            time.sleep(0.005)
+        assert release_motion_service(link.session, wait_s=0.05) == "ai"
         t_end = time.monotonic() + 1.5
         while time.monotonic() < t_end:
             link.send(command)
@@ -93,3 +98,4 @@ def test_the_host_link_connects_learns_mode_machine_and_holds_a_joint() -> None:
     assert child.returncode == 0, err
     report = json.loads(out.strip().splitlines()[-1])
     assert report["commands"] > 100 and report["mode_machine_mismatches"] == 0 and report["crc_errors"] == 0
+    assert report["commands_while_high_level"] >= 1 and report["motion_mode"] == "" and report["motion_release_requests"] == 1

@@ -1,0 +1,83 @@
+"""Hardware configs of a G1 over its low-level DDS topics: `configs/hardware/g1-dds.yaml`, `sim-dds.yaml`.
+
+A DDS config (`transport: dds`) names the domain, the network interface and the topics, the
+joint limits and bring-up gains of the 29 joints, and the safety thresholds; there are no
+buses or motor ids: the robot's main board addresses the motors. `simulated: true` marks a
+config whose robot `g1ctl` starts itself (`g1ctl robot --dds` in a child process). Pure
+configuration: importing this needs no cyclonedds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from hw.dds.session import DdsConfig
+from hw.errors import ConfigError
+from hw.g1 import DAMPING_KD, EFFORT_LIMITS, JOINT_NAMES
+from hw.yamlconfig import from_dict
+
+
+@dataclass(frozen=True)
+class DdsJointConfig:
+    position_limits: tuple[float, float]  # rad
+    velocity_limit: float  # rad/s
+    torque_limit: float  # N m; left out of the YAML it is the G1's effort limit (hw.g1.EFFORT_LIMITS)
+    kp: float = 20.0  # bring-up gains (soft start, sweep)
+    kd: float = 1.0
+
+    def __post_init__(self) -> None:
+        lo, hi = self.position_limits
+        if not lo < hi:
+            raise ValueError(f"position_limits must be [low, high] with low < high, got {list(self.position_limits)}")
+        if self.velocity_limit <= 0 or self.torque_limit <= 0 or self.kp < 0 or self.kd < 0:
+            raise ValueError("velocity_limit and torque_limit must be positive, kp and kd not negative")
+
+
+@dataclass(frozen=True)
+class DdsSafetyConfig:
+    state_timeout: float = 0.05  # s: the newest good LowState_ older than this is a fault (robot gone, cable out)
+    max_position_step: float = 0.3  # rad: largest change of a position target between cycles
+    max_temperature: float = 85.0  # deg C, the hotter of a motor's two sensors
+    damping_kd: float = DAMPING_KD  # N m s/rad while damping
+    soft_start_time: float = 3.0  # s: ramp to the default pose on activate
+    max_bad_states: int = 5  # LowState_s in a row with a bad CRC before it is a fault
+
+    def __post_init__(self) -> None:
+        if self.state_timeout <= 0 or self.soft_start_time < 0 or self.max_position_step <= 0 or self.max_bad_states < 1:
+            raise ValueError("state_timeout and max_position_step must be positive, soft_start_time not negative, max_bad_states >= 1")
+
+
+@dataclass(frozen=True)
+class DdsHardwareConfig:
+    transport: Literal["dds"]
+    dds: DdsConfig
+    joints: dict[str, DdsJointConfig]
+    description: str = ""
+    simulated: bool = False  # true: g1ctl starts the simulated G1 (`g1ctl robot --dds`) on this domain and interface
+    mode_pr: int = 0  # 0: the ankles and waist in pitch/roll mode
+    connect_timeout: float = 2.0  # s to wait for the robot's first LowState_
+    release_motion_service: bool = True  # ask the robot's high-level motion service to let go before low-level control
+    safety: DdsSafetyConfig = field(default_factory=DdsSafetyConfig)
+
+
+def is_dds_config(data: Any) -> bool:
+    return isinstance(data, dict) and data.get("transport") == "dds"
+
+
+def dds_config_from(data: Any, source: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> DdsHardwareConfig:
+    """Build and check a DDS hardware config from its parsed YAML."""
+    joints = data.get("joints") if isinstance(data, dict) else None
+    if isinstance(joints, dict):  # torque limits default to the G1's own
+        joints = {
+            n: {"torque_limit": EFFORT_LIMITS[n], **j} if isinstance(j, dict) and n in EFFORT_LIMITS else j for n, j in joints.items()
+        }
+        data = {**data, "joints": joints}
+    cfg = from_dict(DdsHardwareConfig, data, source)
+    missing = [j for j in expected_joints if j not in cfg.joints]
+    if missing:
+        raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
+    unknown = [j for j in cfg.joints if j not in expected_joints]
+    if unknown:
+        raise ConfigError(f"{source}: unknown joints in the joint map: {', '.join(unknown)}")
+    return cfg

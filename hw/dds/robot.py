@@ -1,0 +1,359 @@
+"""The G1 over its low-level DDS topics, with the same lifecycle and safety layer as the bus robot.
+
+    UNCONFIGURED --configure--> INACTIVE --activate--> ACTIVATING --ramp done--> ACTIVE
+    ACTIVE/ACTIVATING --deactivate--> INACTIVE (damping, then no more commands)
+    any --fault--> ERROR (damping every cycle, latched) --rearm--> INACTIVE
+
+configure: wait for the first `LowState_` with a good CRC and learn `mode_machine`, then release
+the robot's high-level motion service (when the config asks). `cycle()` is one 500 Hz exchange: the
+newest joint command through the safety layer (limits, per-cycle step, soft-start ramp) out as
+one `LowCmd_`, then the newest `LowState_` in and its checks: stale state (robot gone, cable
+out), bad CRCs in a row, a changed `mode_machine`, motor error bits (`motorstate`), motor
+temperature, non-finite values. Any fault latches damping (kp 0, kd `damping_kd`) on every joint.
+In INACTIVE nothing is sent: the robot's own controller keeps the motors limp.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from hw import g1
+from hw.dds.config import DdsHardwareConfig
+from hw.dds.link import DdsLink, LinkCounters
+from hw.errors import HardwareFault, LifecycleError
+from hw.protocols import unitree_hg as hg
+from hw.robot import Lifecycle, RobotInterface
+from hw.safety import JointLimits, command_is_finite, limit_command
+from hw.types import JointCommand, RobotState
+
+log = logging.getLogger(__name__)
+
+DEACTIVATE_DAMPING_CYCLES = 3  # damping frames sent on deactivate before the host falls silent
+
+
+@dataclass(frozen=True)
+class JointReading:
+    """One joint as the robot last reported it (the `hw scan` and `hw monitor` rows)."""
+
+    name: str
+    q: float
+    dq: float
+    tau: float
+    temperature: float  # deg C, the hotter of the motor's two sensors
+    voltage: float
+    error_bits: int  # MotorState_.motorstate: 0 when healthy
+    mode: int  # the motor's mode as the robot reports it (1: enabled)
+
+
+class DdsRobot(RobotInterface):
+    def __init__(
+        self,
+        cfg: DdsHardwareConfig,
+        joint_names: tuple[str, ...] = g1.JOINT_NAMES,
+        default_pose: tuple[float, ...] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        release: Callable[[Any], str | None] | None = None,
+    ) -> None:
+        """`release(session)` frees the robot from its high-level motion service (default: the motion switcher)."""
+        super().__init__()
+        if joint_names != g1.JOINT_NAMES:
+            raise LifecycleError("the G1 over DDS has the G1's 29 joints in the standard order (motor slots 0..28)")
+        self.cfg = cfg
+        self._names = joint_names
+        self.stamp_clock = clock
+        self._release = release
+        self.default_pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
+        self.limits = JointLimits.from_joint_map(joint_names, cfg.joints)
+        self.state = Lifecycle.UNCONFIGURED
+        self.faults: list[str] = []
+        self.fault_count = 0
+        self.clamped_values = 0
+        self.cycles = 0
+        self.released_mode: str | None = None  # the high-level mode released at configure
+        self.link: DdsLink | None = None
+        self._closed_counters = LinkCounters()
+        n = len(joint_names)
+        self._kp = np.array([cfg.joints[name].kp for name in joint_names])
+        self._kd = np.array([cfg.joints[name].kd for name in joint_names])
+        self._damp_kd = np.full(n, cfg.safety.damping_kd)
+        self._zeros = np.zeros(n)
+        self._q, self._dq, self._tau = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._quat, self._gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
+        self._temperature, self._error_bits = np.zeros(n), np.zeros(n, dtype=np.uint32)
+        self._record: np.ndarray | None = None  # the newest good LowState_
+        self._command: JointCommand | None = None
+        self._sent_q: np.ndarray | None = None
+        self._ramp: tuple[float, np.ndarray] | None = None
+        self._ramp_target = self.default_pose
+        self._settled: tuple[JointCommand | None, JointCommand | None] = (None, None)  # (written, limited)
+        self._encoded: tuple[JointCommand | None, bytes] = (None, b"")  # (limited command, its CDR)
+        self._template = hg.new_low_cmd(mode_pr=cfg.mode_pr)
+        self._template["motor_cmd"]["mode"][: g1.NUM_JOINTS] = hg.MOTOR_ENABLE
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self._names
+
+    # -- lifecycle -------------------------------------------------------------------
+    def configure(self) -> None:
+        """Join the robot's domain, wait for its first good `LowState_`, release its high-level motion service."""
+        if self.state is not Lifecycle.UNCONFIGURED:
+            raise LifecycleError(f"configure needs the robot unconfigured, it is {self.state.value}")
+        self.link = DdsLink(self.cfg.dds, self.stamp_clock)
+        try:
+            self.link.connect(self.cfg.connect_timeout)
+            if self.cfg.release_motion_service:
+                self.released_mode = self._release_motion_service()
+        except Exception:
+            self._close_link()
+            raise
+        self._update_state()
+        self.state = Lifecycle.INACTIVE
+
+    def _release_motion_service(self) -> str | None:
+        assert self.link is not None
+        if self._release is not None:
+            return self._release(self.link.session)
+        from hw.dds.motion_switcher import release_motion_service  # noqa: PLC0415
+
+        return release_motion_service(self.link.session)
+
+    def activate(self, target_pose: np.ndarray | None = None) -> None:
+        """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
+        if self.state is not Lifecycle.INACTIVE:
+            raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
+        self._receive()
+        faults = self._check_feedback()
+        if faults:
+            self._enter_error(faults)
+            raise HardwareFault(f"cannot activate: {faults[0]}")
+        self._forget_settled()
+        self._ramp = (self.stamp_clock(), self._q.copy())
+        self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
+        self._sent_q = self._q.copy()
+        self.state = Lifecycle.ACTIVATING
+
+    def deactivate(self) -> None:
+        """Damping for a few cycles, then silence (the robot's controller then holds the motors limp)."""
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            return
+        for _ in range(DEACTIVATE_DAMPING_CYCLES):
+            self._send_damping()
+        if self.state is not Lifecycle.ERROR:
+            self.state = Lifecycle.INACTIVE
+        self._ramp, self._command = None, None
+        self._forget_settled()
+
+    def rearm(self) -> None:
+        """Leave ERROR explicitly once the robot's state is healthy again; the robot is then INACTIVE."""
+        if self.state is not Lifecycle.ERROR:
+            raise LifecycleError(f"rearm needs the robot in error, it is {self.state.value}")
+        self._send_damping()
+        self._receive()
+        faults = self._check_feedback()
+        if faults:
+            raise HardwareFault(f"cannot re-arm: {faults[0]}")
+        self.faults = []
+        self.state = Lifecycle.INACTIVE
+
+    # -- control ---------------------------------------------------------------------
+    def write(self, command: JointCommand) -> None:
+        """Newest command for the next cycles. The robot keeps it: do not change its arrays afterwards."""
+        if not command_is_finite(command):
+            self._enter_error(["non-finite joint command from the controller"])
+            return
+        self._command = command
+
+    def damp(self) -> None:
+        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            self._send_damping()
+
+    def enter_damping(self, reason: str) -> None:
+        """Latch damping on purpose (not a fault): every cycle damps until `rearm()`."""
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+            raise LifecycleError(f"damping needs a configured robot, it is {self.state.value}")
+        log.info("damping: %s", reason)
+        self.state, self.faults, self._command = Lifecycle.ERROR, [reason], None
+        self._send_damping()
+
+    def cycle(self, wait_s: float = 0.0) -> None:
+        """One exchange: the command (or damping) out, then the newest state in and its checks.
+
+        `wait_s`: how long to wait for a state after sending (the benchmark's lock-step robot
+        answers each command; the real robot publishes on its own 2 ms clock: 0).
+        """
+        self.cycles += 1
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED) or self.link is None:
+            raise LifecycleError(f"cycle needs a configured robot, it is {self.state.value}")
+        if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
+            self._send(self._next_command())
+        elif self.state is Lifecycle.ERROR:
+            self._send_damping()
+        if wait_s > 0:
+            self.link.wait(wait_s)
+        self._receive()
+        if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
+            faults = self._check_feedback()
+            if faults:
+                self._enter_error(faults)
+
+    def _next_command(self) -> JointCommand:
+        safety = self.cfg.safety
+        if self.state is Lifecycle.ACTIVATING and self._ramp is not None:
+            start_t, start_q = self._ramp
+            alpha = min((self.stamp_clock() - start_t) / max(safety.soft_start_time, 1e-9), 1.0)
+            cmd = JointCommand(
+                q=start_q + alpha * (self._ramp_target - start_q), dq=self._zeros, kp=self._kp, kd=self._kd, tau_ff=self._zeros
+            )
+            if alpha >= 1.0:
+                self.state, self._ramp, self._command = Lifecycle.ACTIVE, None, cmd
+        elif self._command is None:
+            return self._hold_command()
+        else:
+            cmd = self._command
+            written, settled = self._settled
+            if cmd is written and settled is not None:
+                # The controller writes at 50 Hz, this runs at 500 Hz: a command that already
+                # passed the limits unchanged passes them again, encoded bytes and all.
+                return settled
+        limited, changed = limit_command(cmd, self.limits, self._sent_q, safety.max_position_step)
+        self.clamped_values += changed
+        self._sent_q = limited.q
+        self._settled = (cmd, limited) if changed == 0 and self.state is Lifecycle.ACTIVE else (None, None)
+        return limited
+
+    def _hold_command(self) -> JointCommand:
+        q = self._sent_q if self._sent_q is not None else self._q
+        return JointCommand(q=q, dq=self._zeros, kp=self._kp, kd=self._damp_kd, tau_ff=self._zeros)
+
+    def _forget_settled(self) -> None:
+        """After any state change a command must pass the limits (and the step limit) afresh."""
+        self._settled, self._encoded = (None, None), (None, b"")
+
+    def _send(self, command: JointCommand) -> None:
+        assert self.link is not None
+        if command is not self._encoded[0]:
+            motors = self._template["motor_cmd"]
+            n = g1.NUM_JOINTS
+            motors["q"][:n], motors["dq"][:n], motors["tau"][:n] = command.q, command.dq, command.tau_ff
+            motors["kp"][:n], motors["kd"][:n] = command.kp, command.kd
+            self._encoded = (command, self.link.encode(self._template))
+        self.link.send_cdr(self._encoded[1])
+
+    def _send_damping(self) -> None:
+        if self.link is not None:
+            self._send(JointCommand(q=self._q, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros))
+
+    def _receive(self) -> None:
+        assert self.link is not None
+        self.link.poll()
+        if self.link.state is not self._record:
+            self._update_state()
+
+    def _update_state(self) -> None:
+        assert self.link is not None and self.link.state is not None
+        record = self._record = self.link.state
+        n = g1.NUM_JOINTS
+        motors = record["motor_state"][:n]
+        self._q[:], self._dq[:], self._tau[:] = motors["q"], motors["dq"], motors["tau_est"]
+        self._temperature[:] = motors["temperature"].max(axis=1)
+        self._error_bits[:] = motors["motorstate"]
+        imu = record["imu_state"]
+        self._quat[:], self._gyro[:] = imu["quaternion"], imu["gyroscope"]
+
+    def _check_feedback(self) -> list[str]:
+        """Reasons the robot's state is unsafe right now (empty when all is well)."""
+        assert self.link is not None
+        safety, counters = self.cfg.safety, self.link.counters
+        faults: list[str] = []
+        age = self.stamp_clock() - self.link.state_time
+        if not age <= safety.state_timeout:
+            last = "none yet" if math.isinf(age) else f"the last {1e3 * age:.0f} ms ago"
+            faults.append(f"robot state stale: no good LowState_ within {1e3 * safety.state_timeout:.0f} ms ({last})")
+        if counters.bad_in_a_row >= safety.max_bad_states:
+            faults.append(f"{counters.bad_in_a_row} LowState_s in a row with a bad CRC: the link corrupts data")
+        if counters.mode_machine_changes and self._record is not None:
+            faults.append(
+                f"the robot's mode_machine changed from {self.link.mode_machine} to {int(self._record['mode_machine'])}: "
+                "it refuses commands stamped with the old one (another robot on this domain, or it restarted)"
+            )
+        if self._error_bits.any():
+            faults += [f"{self._names[i]}: motor error bits {int(self._error_bits[i]):#010x}" for i in np.flatnonzero(self._error_bits)]
+        if (self._temperature > safety.max_temperature).any():
+            hot = np.flatnonzero(self._temperature > safety.max_temperature)
+            faults += [
+                f"{self._names[i]}: over-temperature {self._temperature[i]:.0f} C (limit {safety.max_temperature:.0f} C)" for i in hot
+            ]
+        if not (np.isfinite(self._q).all() and np.isfinite(self._dq).all() and np.isfinite(self._quat).all()):
+            bad = [self._names[i] for i in np.flatnonzero(~(np.isfinite(self._q) & np.isfinite(self._dq)))]
+            faults.append(f"non-finite values in the robot's state ({', '.join(bad) or 'IMU'})")
+        return faults
+
+    def _enter_error(self, faults: list[str]) -> None:
+        if self.state is not Lifecycle.ERROR:
+            log.error("hardware fault, damping all joints: %s", "; ".join(faults))
+            self.fault_count += 1
+            self.faults = faults
+        self.state = Lifecycle.ERROR
+        self._command = None
+        self._forget_settled()
+        self._send_damping()
+
+    # -- reading ---------------------------------------------------------------------
+    def read(self) -> RobotState:
+        return RobotState(
+            time=self.stamp_clock(),
+            joint_pos=self._q.copy(),
+            joint_vel=self._dq.copy(),
+            base_quat=self._quat.copy(),
+            base_ang_vel=self._gyro.copy(),
+            base_pos=np.zeros(3),  # the low-level state has no base position
+            base_lin_vel=np.zeros(3),
+            has_base_position=False,
+        )
+
+    def joints(self) -> list[JointReading]:
+        """Every joint as the robot last reported it."""
+        record = self._record
+        if record is None:
+            return []
+        motors = record["motor_state"]
+        rows = zip(
+            self._names, self._q, self._dq, self._tau, self._temperature, motors["vol"], self._error_bits, motors["mode"], strict=False
+        )
+        return [JointReading(n, float(q), float(dq), float(t), float(c), float(v), int(e), int(m)) for n, q, dq, t, c, v, e, m in rows]
+
+    @property
+    def low_state(self) -> np.ndarray | None:
+        """The newest good `LowState_` record (IMU, tick, the remote's bytes), or None before configure."""
+        return self._record
+
+    def state_age(self) -> float:
+        """Seconds since the newest good `LowState_` arrived."""
+        return math.inf if self.link is None else self.stamp_clock() - self.link.state_time
+
+    def counters(self) -> LinkCounters:
+        if self.link is None:
+            return self._closed_counters
+        return self.link.counters
+
+    # -- shutdown --------------------------------------------------------------------
+    def _shutdown(self) -> None:
+        try:
+            self.deactivate()
+        finally:
+            self._close_link()
+            self.state = Lifecycle.CLOSED
+
+    def _close_link(self) -> None:
+        if self.link is not None:
+            self._closed_counters = self.link.counters
+            self.link.close()
+            self.link = None
