@@ -14,8 +14,9 @@ default pose until then (the real one would stand under its own controller, or h
 gantry), so a host that takes seconds to start finds it standing. With `truth` it also
 publishes its ground truth on `sim/truth` (for a run's metrics, `sim.dds_truth`); with
 `lockstep` it answers every command at once with the newest state (the benchmark's round
-trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run. It stops after
-`duration_s` or on SIGTERM/SIGINT and reports what it counted.
+trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run; `remote` fills
+the `LowState_`'s `wireless_remote` (a scenario, the keyboard, a gamepad: `g1ctl robot --remote`).
+It stops after `duration_s` or on SIGTERM/SIGINT and reports what it counted.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 import os
 import signal
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -33,6 +35,7 @@ from hw.emulation.g1_faults import RobotFault
 from hw.emulation.g1_lowlevel import LowLevelConfig
 
 TRUTH_EVERY = 5  # ticks between ground-truth samples (100 Hz at a 2 ms period)
+GANTRY_HEIGHT_M = 0.25  # with `gantry`: the pelvis this far above standing (as `g1ctl hw` hangs simulated buses)
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,8 @@ class DdsRobotConfig:
     truth: bool = False  # publish the simulator's state on sim/truth
     lockstep: bool = False  # answer each LowCmd_ with a LowState_ at once (benchmarks)
     faults: tuple[RobotFault, ...] = ()
+    remote: Callable[[float], bytes] | None = None  # wireless_remote's 40 bytes by the time since the first command; None: zeros
+    gantry: bool = False  # hang the pelvis in a virtual gantry (bring-up: a sweep cannot tip it over)
 
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
@@ -84,7 +89,7 @@ class _Server:
         self.cfg = cfg
         self.robot = SimRobot(build_model(cfg.mjcf))
         self.session = DdsSession(cfg.dds)
-        self.plant = MuJoCoPlant(self.robot)
+        self.plant = MuJoCoPlant(self.robot, gantry_height=GANTRY_HEIGHT_M if cfg.gantry else None)
         self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel)
         self.commands = self.session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
         self.states = self.session.writer(cfg.dds.lowstate_topic, messages.LowState_)
@@ -129,6 +134,7 @@ class _Server:
             os._exit(3)  # the robot process dies: no report, no goodbye on the wire
         self.state_cdr = self._sample()
         if taken and self.cfg.lockstep:
+            self.next_tick = time.monotonic() + self.cfg.period_s  # publish on its own only when no command comes for a period
             return
         self._publish()
         self.next_tick += self.cfg.period_s
@@ -160,7 +166,12 @@ class _Server:
         if "stale" in kinds:
             return None
         uptime = time.monotonic() - self.boot
-        return cdr.low_state_to_cdr(tamper(self.lowlevel.low_state(uptime_s=uptime), kinds))
+        remote = bytes(40) if self.cfg.remote is None else self.cfg.remote(self._since_first_command())
+        return cdr.low_state_to_cdr(tamper(self.lowlevel.low_state(remote=remote, uptime_s=uptime), kinds))
+
+    def _since_first_command(self) -> float:
+        """The remote's time line, like the faults': it starts with the host's first command taken (0 until then)."""
+        return 0.0 if self.physics_start is None else time.monotonic() - self.physics_start
 
     def _publish(self) -> None:
         from hw.dds.session import DdsSession  # noqa: PLC0415
@@ -174,6 +185,7 @@ class _Server:
         return {
             "states_published": self.published, "commands": counters.commands, "crc_errors": counters.crc_errors,
             "bad_frames": self.bad_frames, "mode_machine_mismatches": counters.mode_machine_mismatches, "timeouts": counters.timeouts,
+            "damping_commands": counters.damping_commands,
             "sim_seconds": round(self.plant.time(), 3), "limp": self.lowlevel.limp, "limp_reason": self.lowlevel.limp_reason,
             "motion_mode": self.motion.mode, "motion_release_requests": self.motion.counters.release_requests,
             "commands_while_high_level": self.refused, "faults": sorted(self.faults_seen),

@@ -144,3 +144,22 @@ def fake_embed(strings: list[str]) -> np.ndarray:
         return np.zeros((0, _TEXT_DIM))
     out = np.stack([np.random.default_rng(zlib.crc32(s.encode())).standard_normal(_TEXT_DIM) for s in strings])
     return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+@pytest.fixture
+def sim_dds_config(tmp_path: Path) -> Callable[[int], Path]:
+    """A copy of the shipped sim-dds hardware config on its own DDS domain (`offset` picks among this run's domains).
+
+    Two test runs on one machine (or two tests beside each other) must not hear each other's robots.
+    """
+    from hw.shipped import config_dir
+
+    def on_domain(offset: int) -> Path:
+        text = (config_dir("hardware") / "sim-dds.yaml").read_text()
+        domain = 20 + (os.getpid() * 7 + offset) % 200
+        path = tmp_path / f"sim-dds-{domain}.yaml"
+        path.write_text(text.replace("dds: {domain: 1,", f"dds: {{domain: {domain},"))
+        assert f"domain: {domain}," in path.read_text()
+        return path
+
+    return on_domain

@@ -2,6 +2,7 @@
 
 g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
+g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
@@ -33,6 +34,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     hw_bench.add_argument("--seconds", type=float, default=60.0)
     hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
     hw_bench.add_argument("--cpu", type=int, default=None, help="pin both loops to this CPU (default: the last one; -1: no pinning)")
+
+    dds_bench = bench_sub.add_parser("dds", help="host cycle with the G1 over DDS at 500 Hz against a raw Cyclone DDS round trip")
+    dds_bench.add_argument("--report", type=Path, default=None)
+    dds_bench.add_argument("--seconds", type=float, default=30.0)
+    dds_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority of the host loop (0: normal scheduling)")
+    dds_bench.add_argument("--cpu", type=int, default=None, help="pin the host loop to this CPU (default: the last one; -1: no pinning)")
+    dds_bench.add_argument("--hardware", default="sim-dds", help="a simulated DDS hardware config (its domain and interface)")
 
     inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
     inbetween.add_argument("--data", type=Path, default=None, help="recorded motion dataset (its test split is used)")
@@ -68,6 +76,11 @@ def run(args: argparse.Namespace) -> int:
         from controller.bench.hw import run_hw_bench  # noqa: PLC0415
 
         _emit(run_hw_bench(args.seconds, args.rt_priority, args.cpu), args.report)
+        return 0
+    if args.bench_command == "dds":
+        from controller.bench.dds import run_dds_bench  # noqa: PLC0415 - the g1 extra
+
+        _emit(run_dds_bench(args.seconds, args.rt_priority, args.cpu, args.hardware, args.assets_dir), args.report)
         return 0
     if args.bench_command == "inbetween":
         return _inbetween(args)

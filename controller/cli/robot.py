@@ -1,10 +1,14 @@
 """`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5] [--motion-mode ai]
-[--truth] [--lockstep] [--fault KIND@SECONDS ...]`: a simulated G1 in its own process on the robot's DDS topics."""
+[--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad]`: a simulated G1 in its own
+process on the robot's DDS topics."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+from collections.abc import Callable
+from contextlib import ExitStack
 
 from hw.emulation.g1_faults import KINDS, RobotFault
 from hw.errors import ConfigError
@@ -20,9 +24,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     robot.add_argument("--motion-mode", default="ai", help="high-level mode at boot: LowCmd_ refused until a host releases it ('': none)")
     robot.add_argument("--truth", action="store_true", help="also publish the simulator's state on sim/truth (for a run's metrics)")
     robot.add_argument("--lockstep", action="store_true", help="answer every LowCmd_ at once with a LowState_ (benchmarks)")
+    robot.add_argument("--gantry", action="store_true", help="hang the pelvis in a virtual gantry (bring-up: g1ctl hw)")
     robot.add_argument(
         "--fault", action="append", default=[], metavar="KIND@SECONDS",
         help=f"develop a fault this long after the first command ({', '.join(KINDS)}); repeatable",
+    )  # fmt: skip
+    robot.add_argument(
+        "--remote", default=None, metavar="SCENARIO",
+        help="feed LowState_.wireless_remote from a scenario (name or .yaml; its time starts with the first command taken), "
+        "or from 'keyboard' or 'gamepad' (default: a remote at rest)",
     )  # fmt: skip
 
 
@@ -37,7 +47,33 @@ def run(args: argparse.Namespace) -> int:
     cfg = DdsRobotConfig(
         mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, dds=DdsConfig(domain=args.domain, interface=args.interface),
         lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration, motion_mode=args.motion_mode,
-        truth=args.truth, lockstep=args.lockstep, faults=tuple(RobotFault.parse(f) for f in args.fault),
+        truth=args.truth, lockstep=args.lockstep, gantry=args.gantry, faults=tuple(RobotFault.parse(f) for f in args.fault),
     )  # fmt: skip
-    print(json.dumps(run_dds_robot(cfg)))
+    with ExitStack() as stack:
+        cfg = dataclasses.replace(cfg, remote=_remote(args.remote, stack))
+        print(json.dumps(run_dds_robot(cfg)))
     return 0
+
+
+def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | None:
+    """`--remote`: the remote's bytes by time, as a host reading them with `--input unitree-remote` gets the command back."""
+    if name is None:
+        return None
+    from controller.inputs.base import CommandLimits  # noqa: PLC0415
+    from controller.inputs.unitree_remote import remote_bytes, remote_feed  # noqa: PLC0415
+
+    limits = CommandLimits()  # the sticks carry fractions of these; a host scales them by its policy's ranges (the shipped ones: these)
+    if name in ("keyboard", "gamepad"):
+        from controller.inputs.registry import open_input  # noqa: PLC0415
+
+        return remote_feed(stack.enter_context(open_input(name, limits, "", 0.0, 0)), limits)
+    from controller.inputs.scripted import ScriptedSource, load_scenario, timeline  # noqa: PLC0415
+
+    scenario = load_scenario(name)
+    source = ScriptedSource(timeline(scenario, scenario.duration, limits, seed=0), limits)
+    for step in source.steps:  # a gesture with no button on the remote: refused before the robot starts
+        try:
+            remote_bytes(source.poll(step.t), limits)
+        except ConfigError as exc:
+            raise ConfigError(f"--remote {name}: at {step.t:g} s, {exc}") from exc
+    return remote_feed(source, limits)

@@ -116,12 +116,21 @@ class DdsBackend(Backend):
 class RobotProcess:
     """`g1ctl robot --dds` as a child process: started on a domain, stopped with SIGTERM, its JSON counters kept."""
 
-    def __init__(self, cfg: DdsHardwareConfig, assets_dir: str | None = None, extra_args: tuple[str, ...] = ()) -> None:
+    def __init__(self, cfg: DdsHardwareConfig, assets_dir: str | None = None, extra_args: tuple[str, ...] = (), truth: bool = True) -> None:
         dds = cfg.dds
         command = [sys.executable, "-m", "controller.cli"]
         if assets_dir is not None:
             command += ["--assets-dir", assets_dir]
-        command += ["robot", "--dds", "--domain", str(dds.domain), "--interface", dds.interface, "--truth", *extra_args]
+        command += [
+            "robot",
+            "--dds",
+            "--domain",
+            str(dds.domain),
+            "--interface",
+            dds.interface,
+            *(["--truth"] if truth else []),
+            *extra_args,
+        ]
         self._stdout = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - open for the child's lifetime, closed in stop()
         self._stderr = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115
         self.process = subprocess.Popen(command, stdout=self._stdout, stderr=self._stderr, env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -160,7 +169,10 @@ class RobotProcess:
 class SimulatedDdsBackend(DdsBackend):
     """The simulated G1 in its own process over DDS; `mirror` (the run's copy of the model) follows its ground truth."""
 
-    def __init__(self, mirror: SimRobot, cfg: DdsHardwareConfig, config_name: str, assets_dir: str | None = None) -> None:
+    def __init__(
+        self, mirror: SimRobot, cfg: DdsHardwareConfig, config_name: str, assets_dir: str | None = None, robot_args: tuple[str, ...] = ()
+    ) -> None:
+        """`robot_args`: more flags for `g1ctl robot --dds` (e.g. `--remote SCENARIO`: its wireless remote plays a scenario)."""
         if not cfg.simulated:
             raise ConfigError(f"hardware config '{config_name}' is a real robot ('simulated: false'): g1ctl sim drives simulated robots")
         cfg = dataclasses.replace(cfg, safety=dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S))
@@ -168,7 +180,7 @@ class SimulatedDdsBackend(DdsBackend):
         from sim.dds_truth import TRUTH_TOPIC, SimTruth_  # noqa: PLC0415
 
         self.mirror = mirror
-        self.robot_process = RobotProcess(cfg, assets_dir)
+        self.robot_process = RobotProcess(cfg, assets_dir, robot_args)
         try:
             self._truth_session = DdsSession(cfg.dds)
             self._truth = self._truth_session.reader(TRUTH_TOPIC, SimTruth_)

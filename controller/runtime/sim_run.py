@@ -81,7 +81,7 @@ class RunHooks:
 
 def _check(cfg: SimRunConfig) -> float | None:
     """Input mistakes, found before anything starts; returns the run's duration (None: until stopped)."""
-    check_input(cfg.input)
+    check_input(cfg.input, cfg.hardware)
     scenario = load_scenario(cfg.scenario) if cfg.input == "scripted" else None
     if cfg.hardware is not None:
         hardware = load_robot_config(cfg.hardware)
@@ -157,7 +157,7 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
         raise ConfigError(f"the {tracker.name} tracker follows planned whole-body motion: add --planner")
     backend = _backend(cfg, robot)
     stack.callback(backend.close)
-    source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed))
+    source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed, cfg.hardware))
     wall_paced = backend.paced_on_wall_clock  # a robot in another process: its time is the wall's
     realtime = cfg.realtime or cfg.input != "scripted" or cfg.viewer or wall_paced
     clock = (RealtimeSimulationClock if realtime and not wall_paced else SimulationClock)(backend.now, backend.advance_to)
@@ -211,7 +211,8 @@ def _backend(cfg: SimRunConfig, robot: SimRobot) -> Backend:
     if isinstance(hardware, DdsHardwareConfig):
         from controller.runtime.dds_backend import SimulatedDdsBackend  # noqa: PLC0415 - the g1 extra
 
-        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir)
+        remote = ("--remote", cfg.scenario) if cfg.input == "unitree-remote" else ()  # the robot's remote plays the scenario
+        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir, remote)
     return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
 
 

@@ -111,13 +111,28 @@ _STATE_TO_CDR, _STATE_FROM_CDR = _byte_maps(hg.LOW_STATE, LOW_STATE_BODY, _state
 _ZERO = np.zeros(1, dtype=np.uint8)
 
 
+def _from_message(from_cdr: np.ndarray, body_size: int) -> np.ndarray:
+    """The decoding gather as indices into the whole message: past the 4-byte header, padding on its first byte (always 0)."""
+    return np.where(from_cdr == body_size, -4, from_cdr).astype(np.intp) + 4
+
+
+_CMD_GATHER = _from_message(_CMD_FROM_CDR, LOW_CMD_BODY)
+_STATE_GATHER = _from_message(_STATE_FROM_CDR, LOW_STATE_BODY)
+
+
 def _encode(record: np.ndarray, to_cdr: np.ndarray) -> bytes:
     packed = np.concatenate((np.frombuffer(record.tobytes(), dtype=np.uint8), _ZERO))
     return CDR_LE + packed[to_cdr].tobytes()
 
 
-def _decode(body: np.ndarray, dtype: np.dtype[Any], from_cdr: np.ndarray) -> np.ndarray:
-    return np.frombuffer(np.concatenate((body, _ZERO))[from_cdr].tobytes(), dtype=dtype).reshape(()).copy()
+def _decode(data: Any, gather: np.ndarray, dtype: np.dtype[Any], what: str) -> np.ndarray:
+    """One gather from the message: the packed record, padding zero (as the CRC wants it), in a fresh array."""
+    message = np.frombuffer(data, dtype=np.uint8)
+    if len(message) < 4 + dtype.itemsize - 4 or len(message) < gather.max() + 1:
+        raise FrameError(f"{what} CDR must be {int(gather.max()) + 1} bytes, got {len(message)}")
+    if message[0] != CDR_LE[0] or message[1] != CDR_LE[1]:
+        raise FrameError(f"{what} CDR encapsulation {bytes(message[:2]).hex()} is not plain little-endian CDR (0001)")
+    return message[gather].view(dtype).reshape(())
 
 
 def low_cmd_to_cdr(record: np.ndarray) -> bytes:
@@ -127,7 +142,7 @@ def low_cmd_to_cdr(record: np.ndarray) -> bytes:
 
 def low_cmd_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowCmd_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    return _decode(_body(data, LOW_CMD_BODY, "LowCmd_"), hg.LOW_CMD, _CMD_FROM_CDR)
+    return _decode(data, _CMD_GATHER, hg.LOW_CMD, "LowCmd_")
 
 
 def low_state_to_cdr(record: np.ndarray) -> bytes:
@@ -137,13 +152,4 @@ def low_state_to_cdr(record: np.ndarray) -> bytes:
 
 def low_state_from_cdr(data: bytes | bytearray | memoryview) -> np.ndarray:
     """CDR -> `LowState_` record (the CRC as sent: check it with `hg.crc_ok`)."""
-    return _decode(_body(data, LOW_STATE_BODY, "LowState_"), hg.LOW_STATE, _STATE_FROM_CDR)
-
-
-def _body(data: Any, size: int, what: str) -> np.ndarray:
-    raw = bytes(data)
-    if len(raw) < 4 + size:
-        raise FrameError(f"{what} CDR must be {4 + size} bytes, got {len(raw)}")
-    if raw[:2] != CDR_LE[:2]:
-        raise FrameError(f"{what} CDR encapsulation {raw[:2].hex()} is not plain little-endian CDR (0001)")
-    return np.frombuffer(raw, dtype=np.uint8, count=size, offset=4)
+    return _decode(data, _STATE_GATHER, hg.LOW_STATE, "LowState_")

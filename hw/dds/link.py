@@ -51,7 +51,8 @@ class DdsLink:
         self._reader = self.session.reader(cfg.lowstate_topic, messages.LowState_)
         self._arrived = self.session.wait_set(self._reader)
         self.counters = LinkCounters()
-        self.mode_machine: int | None = None
+        self.mode_machine: int | None = None  # stamped on every command: the robot's at connect
+        self.reported_mode_machine: int | None = None  # what the newest good state says
         self.state: np.ndarray | None = None  # the newest LowState_ record with a good CRC
         self.state_time = -np.inf  # clock time it arrived
 
@@ -77,12 +78,13 @@ class DdsLink:
             except FrameError:
                 self.counters.bad_frames += 1
                 continue
-            if not hg.crc_ok(record):
+            if not hg.crc_ok(record, padding_zero=True):  # decoded from CDR: its padding is zero
                 self.counters.crc_errors += 1
                 self.counters.bad_in_a_row += 1
                 continue
             self.counters.states_received += 1
             self.counters.bad_in_a_row = 0
+            self.reported_mode_machine = int(record["mode_machine"])
             if self.mode_machine is not None and int(record["mode_machine"]) != self.mode_machine:
                 self.counters.mode_machine_changes += 1
             self.state, self.state_time = record, self.clock()

@@ -144,7 +144,9 @@ class DdsRobot(RobotInterface):
         """Damping for a few cycles, then silence (the robot's controller then holds the motors limp)."""
         if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
             return
-        for _ in range(DEACTIVATE_DAMPING_CYCLES):
+        for i in range(DEACTIVATE_DAMPING_CYCLES):  # one per cycle: the robot keeps only the newest command it has not applied
+            if i:
+                time.sleep(1.0 / g1.CONTROL_CYCLE_HZ)
             self._send_damping()
         if self.state is not Lifecycle.ERROR:
             self.state = Lifecycle.INACTIVE
@@ -279,9 +281,9 @@ class DdsRobot(RobotInterface):
             faults.append(f"robot state stale: no good LowState_ within {1e3 * safety.state_timeout:.0f} ms ({last})")
         if counters.bad_in_a_row >= safety.max_bad_states:
             faults.append(f"{counters.bad_in_a_row} LowState_s in a row with a bad CRC: the link corrupts data")
-        if counters.mode_machine_changes and self._record is not None:
+        if self.link.reported_mode_machine != self.link.mode_machine:
             faults.append(
-                f"the robot's mode_machine changed from {self.link.mode_machine} to {int(self._record['mode_machine'])}: "
+                f"the robot's mode_machine changed from {self.link.mode_machine} to {self.link.reported_mode_machine}: "
                 "it refuses commands stamped with the old one (another robot on this domain, or it restarted)"
             )
         if self._error_bits.any():
@@ -301,6 +303,11 @@ class DdsRobot(RobotInterface):
             log.error("hardware fault, damping all joints: %s", "; ".join(faults))
             self.fault_count += 1
             self.faults = faults
+        link = self.link
+        if link is not None and link.reported_mode_machine is not None and link.reported_mode_machine != link.mode_machine:
+            # The robot refuses commands stamped with another mode_machine: damping goes out with the one it reports now.
+            link.mode_machine = link.reported_mode_machine
+            self._encoded = (None, b"")
         self.state = Lifecycle.ERROR
         self._command = None
         self._forget_settled()

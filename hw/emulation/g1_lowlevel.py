@@ -46,6 +46,7 @@ class LowLevelCounters:
     crc_errors: int = 0
     mode_machine_mismatches: int = 0
     timeouts: int = 0  # gaps past the command timeout (each counted once)
+    damping_commands: int = 0  # valid commands that enable every joint with zero stiffness and some damping: a host's safe state
 
 
 class G1LowLevel:
@@ -72,6 +73,9 @@ class G1LowLevel:
             self._go_limp(f"a LowCmd_ for mode_machine {int(record['mode_machine'])} (this robot is {self.mode_machine})")
             return
         self.counters.commands += 1
+        joints = record["motor_cmd"][: g1.NUM_JOINTS]
+        if (joints["mode"] == hg.MOTOR_ENABLE).all() and not joints["kp"].any() and (joints["kd"] > 0).all():
+            self.counters.damping_commands += 1
         self._command, self._last_valid, self.limp_reason = record, now, None
 
     def tick(self, now: float) -> None:

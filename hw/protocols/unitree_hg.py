@@ -63,7 +63,7 @@ if LOW_CMD.itemsize != LOW_CMD_SIZE or LOW_STATE.itemsize != LOW_STATE_SIZE:  # 
     raise RuntimeError(f"unitree_hg layouts are {LOW_CMD.itemsize} and {LOW_STATE.itemsize} bytes, not 1004 and 2092")
 
 
-def message_crc(message: bytes | bytearray | memoryview) -> int:
+def message_crc(message: bytes | bytearray | memoryview | np.ndarray) -> int:
     """The CRC of a packed message: every little-endian uint32 word but the last (the CRC's own)."""
     words = np.frombuffer(message, dtype="<u4", count=len(message) // 4 - 1)
     return crc32_words(words)
@@ -113,9 +113,13 @@ def with_crc(record: np.ndarray) -> np.ndarray:
     return out
 
 
-def crc_ok(record: np.ndarray) -> bool:
-    """Whether a record's CRC matches its fields (packed with zero padding: DDS does not carry the padding)."""
-    return int(record["crc"]) == message_crc(canonical(record).tobytes())
+def crc_ok(record: np.ndarray, padding_zero: bool = False) -> bool:
+    """Whether a record's CRC matches its fields (packed with zero padding: DDS does not carry the padding).
+
+    `padding_zero`: the caller knows the padding is zero already (a record decoded from CDR), which saves a copy.
+    """
+    packed = record if padding_zero else canonical(record)
+    return int(record["crc"]) == message_crc(packed.reshape(1).view(np.uint8) if packed.flags.c_contiguous else packed.tobytes())
 
 
 def pack(record: np.ndarray) -> bytes:

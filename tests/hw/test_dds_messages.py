@@ -102,6 +102,8 @@ def test_the_numpy_cdr_is_byte_for_byte_cyclone_ddss(seed: int) -> None:
     assert cdr.low_state_to_cdr(state) == m.low_state_from_record(state).serialize()  # 2092 bytes
     assert hg.canonical(cdr.low_cmd_from_cdr(cdr.low_cmd_to_cdr(command))).tobytes() == hg.canonical(command).tobytes()
     assert hg.canonical(cdr.low_state_from_cdr(cdr.low_state_to_cdr(state))).tobytes() == hg.canonical(state).tobytes()
+    decoded = cdr.low_state_from_cdr(cdr.low_state_to_cdr(state))
+    assert decoded.tobytes() == hg.canonical(state).tobytes() and hg.crc_ok(decoded, padding_zero=True)  # padding decoded as zero
     assert cdr.low_cmd_to_cdr(command)[4 + 2] == command["motor_cmd"]["mode"][0]  # the first mode right after the header bytes
 
 

@@ -1,0 +1,38 @@
+"""`g1ctl sim --hardware sim-dds`: the whole stack against the simulated G1 in its own process, over loopback DDS."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
+
+from tests.conftest import g1ctl, one_line_error
+
+pytestmark = pytest.mark.slow  # the CLI and the robot process, on the wall clock
+
+
+def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_config: Callable[[int], Path]) -> None:
+    report_path = tmp_path / "report.json"
+    hardware = sim_dds_config(0)
+    result = g1ctl("sim", "--scenario", "walk_turn_stop", "--duration", "6", "--hardware", str(hardware), "--report", str(report_path))
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["falls"] == 0 and report["final_mode"] == "run"
+    assert report["final_base_position"][0] > 1.0  # 4 s at 0.5 m/s forward, seen through the robot's ground truth
+    hw, robot = report["hw"], report["hw"]["robot_process"]
+    assert robot["pid"] != os.getpid() and robot["exit_code"] == 0  # the physics ran in another process, stopped cleanly
+    assert hw["released_mode"] == "ai" and robot["motion_mode"] == "" and robot["motion_release_requests"] == 1
+    assert hw["cycles"] > 2000 and hw["states_received"] > 2000 and hw["crc_errors"] == 0 and hw["faults"] == 0
+    assert robot["commands"] > 2000 and robot["crc_errors"] == 0 and robot["mode_machine_mismatches"] == 0
+    assert robot["damping_commands"] >= 3  # the host damped the robot on its way out
+
+
+def test_a_real_robot_config_is_refused_by_the_simulator() -> None:
+    result = g1ctl("sim", "--duration", "1", "--hardware", "g1-dds")
+    assert result.returncode == 2
+    assert "is a real robot ('simulated: false')" in one_line_error(result)
