@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -21,9 +21,10 @@ from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import JointConfig, motor_to_joint
 from hw.protocols import mit
-from hw.types import JointCommand
+from hw.types import JointCommand, RobotState
 
 Pump = Callable[[], None]
+_J = TypeVar("_J")
 
 
 def probe(host: HardwareRobot) -> list[dict[str, Any]]:
@@ -53,7 +54,7 @@ def format_table(rows: list[dict[str, Any]], columns: tuple[str, ...]) -> str:
         if v is None:
             return "-"
         if isinstance(v, float):
-            return f"{v:.1f}" if column in ("temperature", "temp", "age_ms") else f"{v:+.3f}"
+            return f"{v:.1f}" if column in ("temperature", "temp", "voltage", "age_ms") else f"{v:+.3f}"
         return str(v)
 
     body = [[cell(c, r.get(c)) for c in columns] for r in rows]
@@ -107,6 +108,34 @@ class SweepResult:
     max_abs_torque: float
 
 
+class SweepJoint(Protocol):
+    """What a sweep needs of a joint's config (a bus `JointConfig` or a DDS `DdsJointConfig`)."""
+
+    @property
+    def position_limits(self) -> tuple[float, float]: ...
+    @property
+    def torque_limit(self) -> float: ...
+    @property
+    def kp(self) -> float: ...
+    @property
+    def kd(self) -> float: ...
+
+
+class SweepRobot(Protocol):
+    """What a sweep needs of a robot: the lifecycle of `HardwareRobot` and `DdsRobot` alike."""
+
+    @property
+    def joint_names(self) -> tuple[str, ...]: ...
+    @property
+    def state(self) -> Lifecycle: ...
+    @property
+    def faults(self) -> list[str]: ...
+    def read(self) -> RobotState: ...
+    def write(self, command: JointCommand) -> None: ...
+    def activate(self, target_pose: np.ndarray | None = None) -> None: ...
+    def deactivate(self) -> None: ...
+
+
 def sweep(
     host: HardwareRobot,
     joint_name: str,
@@ -116,15 +145,32 @@ def sweep(
     torque_fraction: float = 0.3,
     max_tracking_error: float = 0.25,
 ) -> SweepResult:
+    """`sweep_joint` on the buses: the joint's torque from its motor's feedback."""
+
+    def torque() -> float:
+        fb = host.feedback(joint_name)
+        return motor_to_joint(host.cfg.joints[joint_name], fb.position, fb.velocity, fb.torque)[2]
+
+    return sweep_joint(host, host.cfg.joints, joint_name, torque, pump, fraction, speed, torque_fraction, max_tracking_error)
+
+
+def sweep_joint(
+    host: SweepRobot,
+    joints: Mapping[str, SweepJoint],
+    joint_name: str,
+    torque: Callable[[], float],
+    pump: Pump,
+    fraction: float = 0.3,
+    speed: float = 0.3,
+    torque_fraction: float = 0.3,
+    max_tracking_error: float = 0.25,
+) -> SweepResult:
     """Move one joint slowly, with half its bring-up gains, through `fraction` of its range
     around the middle and back to where it started; every other joint holds its position.
-    Aborts on any fault, a torque above `torque_fraction` of the joint's limit, or the joint
-    lagging its target by more than `max_tracking_error` rad (stuck or blocked)."""
-    joint = _joint(host, joint_name)
-    if not 0.0 < fraction <= 1.0:
-        raise ConfigError(f"--fraction must be within (0, 1], got {fraction}")
-    if not 0.0 < speed <= 2.0:
-        raise ConfigError(f"--speed must be within (0, 2] rad/s, got {speed}")
+    Aborts on any fault, a torque above `torque_fraction` of the joint's limit (`torque()`:
+    the joint's newest torque, N m), or the joint lagging its target by more than
+    `max_tracking_error` rad (stuck or blocked)."""
+    joint = check_sweep(joints, joint_name, host.joint_names, fraction, speed)
     index = host.joint_names.index(joint_name)
     lo, hi = joint.position_limits
     mid, half = (lo + hi) / 2, (hi - lo) * fraction / 2
@@ -135,8 +181,8 @@ def sweep(
         pump()
     start = hold_pose[index]
     waypoints = [start, low, high, start]
-    kp = np.array([host.cfg.joints[n].kp for n in host.joint_names])
-    kd = np.array([host.cfg.joints[n].kd for n in host.joint_names])
+    kp = np.array([joints[n].kp for n in host.joint_names])
+    kd = np.array([joints[n].kd for n in host.joint_names])
     kp[index] *= 0.5
     kd[index] *= 0.5
     q = hold_pose.copy()
@@ -150,8 +196,7 @@ def sweep(
             q[index] = a + (b - a) * k / steps
             host.write(JointCommand(q=q.copy(), dq=np.zeros_like(q), kp=kp, kd=kd, tau_ff=np.zeros_like(q)))
             pump()
-            fb = host.feedback(joint_name)
-            tau = abs(motor_to_joint(joint, fb.position, fb.velocity, fb.torque)[2])
+            tau = abs(torque())
             max_tau = max(max_tau, tau)
             if host.state is Lifecycle.ERROR:
                 reason = f"fault: {'; '.join(host.faults)}"
@@ -198,7 +243,21 @@ def imu_summary(host: HardwareRobot, pump: Pump, seconds: float = 1.0) -> dict[s
     }
 
 
+def check_sweep(joints: Mapping[str, _J], joint_name: str, names: tuple[str, ...], fraction: float, speed: float) -> _J:
+    """The swept joint's config; a bad sweep refused in one line (callable before the robot is opened)."""
+    joint = _joint_config(joints, joint_name, names)
+    if not 0.0 < fraction <= 1.0:
+        raise ConfigError(f"--fraction must be within (0, 1], got {fraction}")
+    if not 0.0 < speed <= 2.0:
+        raise ConfigError(f"--speed must be within (0, 2] rad/s, got {speed}")
+    return joint
+
+
 def _joint(host: HardwareRobot, name: str) -> JointConfig:
-    if name not in host.cfg.joints:
-        raise ConfigError(f"unknown joint '{name}' (joints: {', '.join(host.joint_names)})")
-    return host.cfg.joints[name]
+    return _joint_config(host.cfg.joints, name, host.joint_names)
+
+
+def _joint_config(joints: Mapping[str, _J], name: str, names: tuple[str, ...]) -> _J:
+    if name not in joints:
+        raise ConfigError(f"unknown joint '{name}' (joints: {', '.join(names)})")
+    return joints[name]

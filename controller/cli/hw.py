@@ -1,6 +1,6 @@
 """`g1ctl hw ...`: bench bring-up against real or simulated hardware from a hardware config.
 
-g1ctl hw scan    --hardware sim-can
+g1ctl hw scan    --hardware sim-can      (or a G1 over DDS: g1-dds, sim-dds; these have no zero)
 g1ctl hw monitor --hardware sim-can [--seconds 5] [--refresh 0.2]
 g1ctl hw zero    --hardware my-robot --joint left_knee_joint [--yes]
 g1ctl hw sweep   --hardware my-robot --joint left_knee_joint [--fraction 0.3] [--speed 0.3] [--yes]
@@ -36,7 +36,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     monitor.add_argument("--seconds", type=float, default=10.0)
     monitor.add_argument("--refresh", type=float, default=0.25)
     zero = with_hardware("zero", help_text="set a joint's encoder zero at its current position")
-    zero.add_argument("--joint", required=True)
+    zero.add_argument("--joint", default=None, help="required (a G1 over DDS has no zero: refused)")
     zero.add_argument("--yes", action="store_true", help="do not ask for confirmation")
     sweep = with_hardware("sweep", help_text="slow, low-gain move of one joint through part of its range and back")
     sweep.add_argument("--joint", required=True)
@@ -67,7 +67,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run(args: argparse.Namespace) -> int:
     if args.hw_command == "frame":
         return _frame(args)
-    from controller.runtime.bringup import BringupConfig  # noqa: PLC0415
+    from controller.runtime.bringup import BringupConfig, check  # noqa: PLC0415
     from controller.runtime.bringup import run as run_bringup  # noqa: PLC0415
 
     cfg = BringupConfig(
@@ -75,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
         refresh=getattr(args, "refresh", 0.25), fraction=getattr(args, "fraction", 0.3), speed=getattr(args, "speed", 0.3),
         rt_priority=args.rt_priority, cpu=args.cpu, assets_dir=args.assets_dir,
     )  # fmt: skip
+    check(cfg)  # bad input refused before asking to confirm
     if cfg.operation in ("zero", "sweep") and not args.yes and not _confirm(f"{cfg.operation} {cfg.joint} on '{cfg.hardware}'?"):
         print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
         return 1

@@ -77,6 +77,7 @@ class DdsRobot(RobotInterface):
         self.clamped_values = 0
         self.cycles = 0
         self.released_mode: str | None = None  # the high-level mode released at configure
+        self._commanded = False  # the robot is this host's to command (released, activated, damped): only then does it send
         self.link: DdsLink | None = None
         self._closed_counters = LinkCounters()
         n = len(joint_names)
@@ -111,6 +112,7 @@ class DdsRobot(RobotInterface):
             self.link.connect(self.cfg.connect_timeout)
             if self.cfg.release_motion_service:
                 self.released_mode = self._release_motion_service()
+                self._commanded = True  # the motors are this host's now: from here on every exit damps them
         except Exception:
             self._close_link()
             raise
@@ -138,11 +140,11 @@ class DdsRobot(RobotInterface):
         self._ramp = (self.stamp_clock(), self._q.copy())
         self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
         self._sent_q = self._q.copy()
-        self.state = Lifecycle.ACTIVATING
+        self.state, self._commanded = Lifecycle.ACTIVATING, True
 
     def deactivate(self) -> None:
         """Damping for a few cycles, then silence (the robot's controller then holds the motors limp)."""
-        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED) or not self._commanded:
             return
         for i in range(DEACTIVATE_DAMPING_CYCLES):  # one per cycle: the robot keeps only the newest command it has not applied
             if i:
@@ -174,7 +176,8 @@ class DdsRobot(RobotInterface):
         self._command = command
 
     def damp(self) -> None:
-        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+        """Damping, once this host has commanded the robot (a host that only listened sends nothing)."""
+        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED) and self._commanded:
             self._send_damping()
 
     def enter_damping(self, reason: str) -> None:
@@ -182,7 +185,7 @@ class DdsRobot(RobotInterface):
         if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
             raise LifecycleError(f"damping needs a configured robot, it is {self.state.value}")
         log.info("damping: %s", reason)
-        self.state, self.faults, self._command = Lifecycle.ERROR, [reason], None
+        self.state, self.faults, self._command, self._commanded = Lifecycle.ERROR, [reason], None, True
         self._send_damping()
 
     def cycle(self, wait_s: float = 0.0) -> None:
@@ -250,7 +253,7 @@ class DdsRobot(RobotInterface):
         self.link.send_cdr(self._encoded[1])
 
     def _send_damping(self) -> None:
-        if self.link is not None:
+        if self.link is not None and self._commanded:
             self._send(JointCommand(q=self._q, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros))
 
     def _receive(self) -> None:
