@@ -13,8 +13,9 @@ Unlike the robot, its physics waits for the first command it takes: the G1 stand
 default pose until then (the real one would stand under its own controller, or hang on a
 gantry), so a host that takes seconds to start finds it standing. With `truth` it also
 publishes its ground truth on `sim/truth` (for a run's metrics, `sim.dds_truth`); with
-`lockstep` it answers every command at once with the newest state (the benchmark's round
-trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run; `remote` fills
+`lockstep` it answers every command at once with the newest state and steps one period of
+physics per command, quiet in between but for a heartbeat state every 100 ms (the benchmark's
+round trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run; `remote` fills
 the `LowState_`'s `wireless_remote` (a scenario, the keyboard, a gamepad: `g1ctl robot --remote`).
 It stops after `duration_s` or on SIGTERM/SIGINT and reports what it counted.
 """
@@ -34,6 +35,7 @@ from hw.dds.session import DdsConfig
 from hw.emulation.g1_faults import RobotFault
 from hw.emulation.g1_lowlevel import LowLevelConfig
 
+LOCKSTEP_SILENCE = 50  # periods without a command before a lock-step robot publishes on its own
 TRUTH_EVERY = 5  # ticks between ground-truth samples (100 Hz at a 2 ms period)
 GANTRY_HEIGHT_M = 0.25  # with `gantry`: the pelvis this far above standing (as `g1ctl hw` hangs simulated buses)
 
@@ -94,6 +96,7 @@ class _Server:
         self.commands = self.session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
         self.states = self.session.writer(cfg.dds.lowstate_topic, messages.LowState_)
         self.command_arrived = self.session.wait_set(self.commands)
+        self.take_commands, self.write_state = DdsSession.cdr_taker(self.commands), DdsSession.cdr_writer(self.states)
         self.motion = MotionSwitcherService(self.session, cfg.motion_mode)
         self._truth_type = SimTruth_
         self.truth = self.session.writer(TRUTH_TOPIC, SimTruth_) if cfg.truth else None
@@ -105,14 +108,13 @@ class _Server:
 
     def tick(self) -> None:
         from hw.dds import cdr  # noqa: PLC0415
-        from hw.dds.session import DdsSession  # noqa: PLC0415
         from hw.protocols.crc import FrameError  # noqa: PLC0415
 
         if self.cfg.lockstep:
             self.command_arrived(max(self.next_tick - time.monotonic(), 0.0))
         now = self.plant.time()
         self.motion.poll()  # under a microsecond when no request waits
-        taken = DdsSession.take_cdr(self.commands)
+        taken = self.take_commands()
         if taken and self.cfg.lockstep:
             self._publish()  # the state sampled before this command: a robot's sensors do not wait for the host
         for data in taken:
@@ -126,22 +128,26 @@ class _Server:
         if self.physics_start is None and self.lowlevel.counters.commands:
             self.physics_start = time.monotonic()
         self.lowlevel.tick(now)
-        if self.physics_start is not None:
+        if self.physics_start is not None and not self.cfg.lockstep:
             target = time.monotonic() - self.physics_start
             while self.plant.time() < target:  # physics keeps up with the wall clock
                 self.plant.step()
+        elif self.physics_start is not None and taken:
+            self.plant.step()  # lock-step: one period of physics per command, none while the host is silent
         if "exit" in self._faults():
             os._exit(3)  # the robot process dies: no report, no goodbye on the wire
         self.state_cdr = self._sample()
         if taken and self.cfg.lockstep:
-            self.next_tick = time.monotonic() + self.cfg.period_s  # publish on its own only when no command comes for a period
+            # On its own it publishes only after a silence of LOCKSTEP_SILENCE periods (a heartbeat for hosts connecting):
+            # at one period its tick would race the host's next command (both 2 ms) and answer it late.
+            self.next_tick = time.monotonic() + LOCKSTEP_SILENCE * self.cfg.period_s
             return
         self._publish()
         self.next_tick += self.cfg.period_s
         if not self.cfg.lockstep:
             time.sleep(max(0.0, self.next_tick - time.monotonic()))
-        elif time.monotonic() > self.next_tick + self.cfg.period_s:
-            self.boot = self.next_tick = time.monotonic()
+        else:
+            self.next_tick = time.monotonic() + LOCKSTEP_SILENCE * self.cfg.period_s
 
     def _faults(self) -> frozenset[str]:
         from hw.emulation.g1_faults import active  # noqa: PLC0415
@@ -174,10 +180,9 @@ class _Server:
         return 0.0 if self.physics_start is None else time.monotonic() - self.physics_start
 
     def _publish(self) -> None:
-        from hw.dds.session import DdsSession  # noqa: PLC0415
 
         if self.state_cdr is not None:
-            DdsSession.write_cdr(self.states, self.state_cdr)
+            self.write_state(self.state_cdr)
             self.published += 1
 
     def report(self) -> dict[str, Any]:

@@ -50,11 +50,28 @@ class DdsLink:
         self._writer = self.session.writer(cfg.lowcmd_topic, messages.LowCmd_)
         self._reader = self.session.reader(cfg.lowstate_topic, messages.LowState_)
         self._arrived = self.session.wait_set(self._reader)
+        self._write, self._take = DdsSession.cdr_writer(self._writer), DdsSession.cdr_taker(self._reader)
         self.counters = LinkCounters()
         self.mode_machine: int | None = None  # stamped on every command: the robot's at connect
         self.reported_mode_machine: int | None = None  # what the newest good state says
-        self.state: np.ndarray | None = None  # the newest LowState_ record with a good CRC
+        self.data: bytes | None = None  # the newest LowState_ with a good CRC, as CDR (`cdr.state_health` reads it in place)
         self.state_time = -np.inf  # clock time it arrived
+        self._arrays: cdr.JointArrays | None = None  # views and record of it, built when asked for
+        self._record: np.ndarray | None = None
+
+    @property
+    def arrays(self) -> cdr.JointArrays | None:
+        """The newest good state's joints and IMU as views (the same object until the next good state)."""
+        if self._arrays is None and self.data is not None:
+            self._arrays = cdr.joint_arrays(self.data)
+        return self._arrays
+
+    @property
+    def state(self) -> np.ndarray | None:
+        """The newest good `LowState_` as a record (built on first use)."""
+        if self._record is None and self.data is not None:
+            self._record = cdr.low_state_from_cdr(self.data)
+        return self._record
 
     def connect(self, timeout_s: float = 2.0) -> np.ndarray:
         """The robot's first good `LowState_`; its `mode_machine` is kept for every command."""
@@ -72,23 +89,24 @@ class DdsLink:
 
     def poll(self) -> float | None:
         """Take what arrived; the age (s) of the newest good state, None before the first."""
-        for data in DdsSession.take_cdr(self._reader):
+        now = self.clock()
+        for data in self._take():
             try:
-                record = cdr.low_state_from_cdr(data)
+                crc_ok = cdr.low_state_crc_ok(data)
             except FrameError:
                 self.counters.bad_frames += 1
                 continue
-            if not hg.crc_ok(record, padding_zero=True):  # decoded from CDR: its padding is zero
+            if not crc_ok:
                 self.counters.crc_errors += 1
                 self.counters.bad_in_a_row += 1
                 continue
             self.counters.states_received += 1
             self.counters.bad_in_a_row = 0
-            self.reported_mode_machine = int(record["mode_machine"])
-            if self.mode_machine is not None and int(record["mode_machine"]) != self.mode_machine:
+            self.reported_mode_machine = data[cdr.MODE_MACHINE_AT]
+            if self.mode_machine is not None and self.reported_mode_machine != self.mode_machine:
                 self.counters.mode_machine_changes += 1
-            self.state, self.state_time = record, self.clock()
-        return None if self.state is None else self.clock() - self.state_time
+            self.data, self._arrays, self._record, self.state_time = data, None, None, now
+        return None if self.data is None else now - self.state_time
 
     def wait(self, timeout_s: float) -> None:
         """Block until a `LowState_` is waiting (at most `timeout_s`): the benchmark's round trip waits on the answer."""
@@ -110,7 +128,7 @@ class DdsLink:
         return cdr.low_cmd_to_cdr(hg.with_crc(out))
 
     def send_cdr(self, data: bytes) -> None:
-        DdsSession.write_cdr(self._writer, data)
+        self._write(data)
         self.counters.commands_sent += 1
 
     def close(self) -> None:

@@ -25,6 +25,8 @@ from typing import Any
 import numpy as np
 
 from hw import g1
+from hw.dds import cdr
+from hw.dds.cdr import JointArrays
 from hw.dds.config import DdsHardwareConfig
 from hw.dds.link import DdsLink, LinkCounters
 from hw.errors import HardwareFault, LifecycleError
@@ -88,7 +90,7 @@ class DdsRobot(RobotInterface):
         self._q, self._dq, self._tau = np.zeros(n), np.zeros(n), np.zeros(n)
         self._quat, self._gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
         self._temperature, self._error_bits = np.zeros(n), np.zeros(n, dtype=np.uint32)
-        self._record: np.ndarray | None = None  # the newest good LowState_
+        self._applied: JointArrays | None = None  # the state the joint arrays below were last filled from
         self._command: JointCommand | None = None
         self._sent_q: np.ndarray | None = None
         self._ramp: tuple[float, np.ndarray] | None = None
@@ -132,6 +134,7 @@ class DdsRobot(RobotInterface):
         if self.state is not Lifecycle.INACTIVE:
             raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
         self._receive()
+        self._update_state()
         faults = self._check_feedback()
         if faults:
             self._enter_error(faults)
@@ -235,6 +238,7 @@ class DdsRobot(RobotInterface):
         return limited
 
     def _hold_command(self) -> JointCommand:
+        self._update_state()
         q = self._sent_q if self._sent_q is not None else self._q
         return JointCommand(q=q, dq=self._zeros, kp=self._kp, kd=self._damp_kd, tau_ff=self._zeros)
 
@@ -254,31 +258,46 @@ class DdsRobot(RobotInterface):
 
     def _send_damping(self) -> None:
         if self.link is not None and self._commanded:
+            self._update_state()  # damping holds no position, but a command carries the measured one
             self._send(JointCommand(q=self._q, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros))
 
     def _receive(self) -> None:
         assert self.link is not None
         self.link.poll()
-        if self.link.state is not self._record:
-            self._update_state()
 
     def _update_state(self) -> None:
-        assert self.link is not None and self.link.state is not None
-        record = self._record = self.link.state
-        n = g1.NUM_JOINTS
-        motors = record["motor_state"][:n]
-        self._q[:], self._dq[:], self._tau[:] = motors["q"], motors["dq"], motors["tau_est"]
-        self._temperature[:] = motors["temperature"].max(axis=1)
-        self._error_bits[:] = motors["motorstate"]
-        imu = record["imu_state"]
-        self._quat[:], self._gyro[:] = imu["quaternion"], imu["gyroscope"]
+        """The newest state's joints and IMU into the robot's arrays; only when someone reads them (the 500 Hz checks read in place)."""
+        arrays = None if self.link is None else self.link.arrays
+        if arrays is None or arrays is self._applied:
+            return
+        self._applied = arrays
+        motion = arrays.motion
+        self._q[:], self._dq[:], self._tau[:] = motion[:, 0], motion[:, 1], motion[:, 3]
+        self._temperature[:] = arrays.temperature.max(axis=1)
+        self._error_bits[:] = arrays.motorstate
+        self._quat[:], self._gyro[:] = arrays.imu[:4], arrays.imu[4:7]
 
     def _check_feedback(self) -> list[str]:
         """Reasons the robot's state is unsafe right now (empty when all is well)."""
+        link, safety = self.link, self.cfg.safety
+        assert link is not None
+        now = self.stamp_clock()
+        if (  # the common case in one expression, every cycle; any doubt is spelled out by `_fault_reasons`
+            link.data is not None
+            and now - link.state_time <= safety.state_timeout
+            and link.counters.bad_in_a_row < safety.max_bad_states
+            and link.reported_mode_machine == link.mode_machine
+        ):
+            health = cdr.state_health(link.data)
+            if health.finite and not health.error_bits and health.max_temperature <= safety.max_temperature:
+                return []
+        return self._fault_reasons(now)
+
+    def _fault_reasons(self, now: float) -> list[str]:
         assert self.link is not None
         safety, counters = self.cfg.safety, self.link.counters
         faults: list[str] = []
-        age = self.stamp_clock() - self.link.state_time
+        age = now - self.link.state_time
         if not age <= safety.state_timeout:
             last = "none yet" if math.isinf(age) else f"the last {1e3 * age:.0f} ms ago"
             faults.append(f"robot state stale: no good LowState_ within {1e3 * safety.state_timeout:.0f} ms ({last})")
@@ -289,15 +308,18 @@ class DdsRobot(RobotInterface):
                 f"the robot's mode_machine changed from {self.link.mode_machine} to {self.link.reported_mode_machine}: "
                 "it refuses commands stamped with the old one (another robot on this domain, or it restarted)"
             )
-        if self._error_bits.any():
+        arrays = self.link.arrays
+        if arrays is None:
+            return faults
+        if arrays.motorstate.any() or arrays.temperature.max() > safety.max_temperature:
+            self._update_state()
             faults += [f"{self._names[i]}: motor error bits {int(self._error_bits[i]):#010x}" for i in np.flatnonzero(self._error_bits)]
-        if (self._temperature > safety.max_temperature).any():
             hot = np.flatnonzero(self._temperature > safety.max_temperature)
             faults += [
                 f"{self._names[i]}: over-temperature {self._temperature[i]:.0f} C (limit {safety.max_temperature:.0f} C)" for i in hot
             ]
-        if not (np.isfinite(self._q).all() and np.isfinite(self._dq).all() and np.isfinite(self._quat).all()):
-            bad = [self._names[i] for i in np.flatnonzero(~(np.isfinite(self._q) & np.isfinite(self._dq)))]
+        if not math.isfinite(float(arrays.motion.sum()) + float(arrays.imu.sum())):
+            bad = [self._names[i] for i in np.flatnonzero(~np.isfinite(arrays.motion).all(axis=1))]
             faults.append(f"non-finite values in the robot's state ({', '.join(bad) or 'IMU'})")
         return faults
 
@@ -318,6 +340,7 @@ class DdsRobot(RobotInterface):
 
     # -- reading ---------------------------------------------------------------------
     def read(self) -> RobotState:
+        self._update_state()
         return RobotState(
             time=self.stamp_clock(),
             joint_pos=self._q.copy(),
@@ -331,7 +354,8 @@ class DdsRobot(RobotInterface):
 
     def joints(self) -> list[JointReading]:
         """Every joint as the robot last reported it."""
-        record = self._record
+        self._update_state()
+        record = self.low_state
         if record is None:
             return []
         motors = record["motor_state"]
@@ -342,8 +366,8 @@ class DdsRobot(RobotInterface):
 
     @property
     def low_state(self) -> np.ndarray | None:
-        """The newest good `LowState_` record (IMU, tick, the remote's bytes), or None before configure."""
-        return self._record
+        """The newest good `LowState_` record (IMU, tick, the remote's bytes); None before configure and after close."""
+        return None if self.link is None else self.link.state
 
     def state_age(self) -> float:
         """Seconds since the newest good `LowState_` arrived."""

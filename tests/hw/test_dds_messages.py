@@ -114,3 +114,20 @@ def test_a_short_or_big_endian_sample_is_refused() -> None:
         cdr.low_cmd_from_cdr(data[:1000])
     with pytest.raises(FrameError, match="not plain little-endian CDR"):
         cdr.low_cmd_from_cdr(b"\x00\x00\x00\x00" + data[4:])
+
+
+def test_the_cdr_crc_and_health_read_in_place_agree_with_the_record() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(50):  # any bytes at all, NaNs included: the CRC is over the packed words
+        record = hg.with_crc(np.frombuffer(rng.bytes(hg.LOW_STATE_SIZE), np.uint8).copy().view(hg.LOW_STATE).reshape(()))
+        data = cdr.low_state_to_cdr(record)
+        assert cdr.low_state_crc_ok(data) and hg.crc_ok(record)
+        broken = bytearray(data)
+        broken[4 + 70] ^= 0x01  # motor 0's mode, the one byte whose word is split for the CRC
+        assert not cdr.low_state_crc_ok(bytes(broken))
+    state = a_low_state()
+    state["motor_state"]["motorstate"][7], state["motor_state"]["temperature"][12] = 0x20, (91, 40)
+    health = cdr.state_health(cdr.low_state_to_cdr(hg.with_crc(state)))
+    assert health == (91, True, True)
+    state["imu_state"]["gyroscope"][1] = np.nan
+    assert not cdr.state_health(cdr.low_state_to_cdr(hg.with_crc(state))).finite
