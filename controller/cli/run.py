@@ -22,13 +22,17 @@ from controller.inputs.registry import INPUTS
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     run = sub.add_parser("run", help="drive the simulated G1 through the planner: viewer or headless, keyboard, gamepad or a scenario")
-    run.add_argument("--input", default="auto", choices=("auto", *INPUTS), help="auto: gamepad, else keyboard in a terminal, else scripted")
+    run.add_argument(
+        "--input", default="auto", choices=("auto", *INPUTS), help="auto: the robot's remote on a G1; gamepad, else keyboard, else scripted"
+    )
     run.add_argument("--scenario", default="walk_turn_stop", help="with scripted input: shipped scenario name or YAML path")
     run.add_argument("--video", type=Path, default=None, help="also record an .mp4 or .gif (with the planned ghost)")
     run.add_argument("--no-planner", action="store_true", help="track the command directly, without the planner")
     run.add_argument("--tracker", default=None, help="tracker by name (default: decoupled with the planner, else velocity)")
     run.add_argument("--policy", default="fastsac", help="locomotion policy preset or YAML")
-    run.add_argument("--hardware", default=None, help="through simulated hardware (sim-can, sim-mixed)")
+    run.add_argument(
+        "--hardware", default=None, help="simulated hardware (sim-can, sim-mixed, sim-dds), or a real G1 (g1-dds or your copy)"
+    )
     run.add_argument("--duration", type=float, default=None, help="seconds (default: the scenario's; interactive: until Ctrl-C)")
     run.add_argument("--headless", action="store_true", help="no viewer even where a display exists")
     run.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
@@ -36,15 +40,16 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    viewer = not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    if args.video is not None or not viewer:
+    from controller.cli.sim import is_real_robot, run_and_summarize  # noqa: PLC0415
+    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
+
+    on_robot = args.hardware is not None and is_real_robot(args.hardware)  # a real G1: no viewer, its own remote by default
+    viewer = not on_robot and not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if not on_robot and (args.video is not None or not viewer):
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()
-    from controller.cli.sim import run_and_summarize  # noqa: PLC0415
-    from controller.runtime.sim_run import SimRunConfig  # noqa: PLC0415 - imports MuJoCo
-
-    source = _choose_input(args.input)
+    source = "unitree-remote" if on_robot and args.input == "auto" else _choose_input(args.input)
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
@@ -52,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     if source != "scripted":
         print(f"g1ctl run: {source} input, {'viewer' if viewer else 'headless'}; Ctrl-C ends the run", file=sys.stderr)
-    return run_and_summarize(cfg)
+    return run_and_summarize(cfg, on_robot=True)
 
 
 def _choose_input(choice: str) -> str:

@@ -2,7 +2,7 @@
 
 g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--tracker velocity] [--duration S] [--seed N]
           [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
-          [--input scripted|keyboard|gamepad] [--hardware sim-can|sim-mixed|PATH] [--faults FILE] [--progress]
+          [--input scripted|keyboard|gamepad|unitree-remote] [--hardware sim-can|sim-mixed|sim-dds|PATH] [--faults FILE] [--progress]
 """
 
 from __future__ import annotations
@@ -14,9 +14,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from controller.inputs.registry import INPUTS
+from hw.errors import ConfigError
 
 if TYPE_CHECKING:
-    from controller.runtime.sim_run import SimRunConfig
+    from controller.runtime.run_config import SimRunConfig
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -33,7 +34,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim.add_argument("--picture", type=Path, default=None, help="write a .png of the final frame")
     sim.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     sim.add_argument("--plot", type=Path, default=None, help="where to write the velocity plot (default: beside the report)")
-    sim.add_argument("--hardware", default=None, help="drive the sim through a hardware config's codecs and buses (sim-can, sim-mixed)")
+    sim.add_argument(
+        "--hardware",
+        default=None,
+        help="through simulated hardware: its codecs and buses (sim-can, sim-mixed), or the G1 over DDS (sim-dds)",
+    )
     sim.add_argument("--faults", default=None, help="with --hardware: YAML of faults to inject per bus (configs/faults/)")
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
@@ -46,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()  # before MuJoCo is imported, which fixes its OpenGL backend
-    from controller.runtime.sim_run import SimRunConfig  # noqa: PLC0415 - imports MuJoCo
+    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
 
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=args.planner, duration=args.duration, seed=args.seed,
@@ -58,13 +63,34 @@ def run(args: argparse.Namespace) -> int:
     return run_and_summarize(cfg)
 
 
-def run_and_summarize(cfg: SimRunConfig) -> int:
-    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault."""
-    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
+def is_real_robot(hardware: str) -> bool:
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
 
-    report = run_sim(cfg)
+    config = load_robot_config(hardware)
+    return isinstance(config, DdsHardwareConfig) and not config.simulated
+
+
+def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
+    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault.
+
+    `on_robot`: a real robot's config (`simulated: false`) drives that robot (`g1ctl run`); otherwise it is refused.
+    """
+    if cfg.hardware is not None and is_real_robot(cfg.hardware):
+        if not on_robot:
+            hardware = cfg.hardware
+            raise ConfigError(
+                f"hardware config '{hardware}' is a real robot: g1ctl sim simulates; drive it with g1ctl run --hardware {hardware}"
+            )
+        from controller.runtime.robot_run import run as run_robot  # noqa: PLC0415 - the g1 extra, no MuJoCo
+
+        report = run_robot(cfg)
+    else:
+        from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
+
+        report = run_sim(cfg)
     summary_keys = ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
-    print(json.dumps({k: report[k] for k in summary_keys}))
+    print(json.dumps({k: report[k] for k in summary_keys if k in report}))
     if "plan_latency_ms" in report:
         print(json.dumps({k: report[k] for k in ("plan_latency_ms", "replans", "late_plans", "planner_failures") if k in report}))
     for key in ("video", "picture", "plot"):

@@ -15,7 +15,6 @@ import time
 from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
@@ -27,6 +26,7 @@ from controller.reports import write_report
 from controller.runtime.backend import Backend
 from controller.runtime.loop import RateLoop, RealtimeSimulationClock, SimulationClock
 from controller.runtime.plots import plot_tracking
+from controller.runtime.run_config import SimRunConfig
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend, SimulatedHardwareBackend
 from controller.runtime.status import StatusLine
@@ -41,29 +41,6 @@ if TYPE_CHECKING:
     from controller.inputs.base import CommandLimits
     from controller.reference.planned import PlannedReference
     from controller.reference.source import ReferenceSource
-
-
-@dataclass(frozen=True)
-class SimRunConfig:
-    scenario: str = "walk_turn_stop"
-    policy: str = "fastsac"
-    tracker: str | None = None  # None: "decoupled" with the planner, else "velocity"
-    planner: bool = False  # plan whole-body motion from the command (10 Hz replanning) and track the plan
-    duration: float | None = None  # None: the scenario's duration
-    seed: int = 0
-    input: str = "scripted"
-    video: Path | None = None
-    report: Path | None = None
-    plot: Path | None = None  # None: beside the report, as .png
-    realtime: bool = False
-    viewer: bool = False
-    progress: bool = False
-    assets_dir: str | None = None
-    video_fps: int = 20
-    hardware: str | None = None  # a hardware config: drive the sim through its codecs and buses
-    faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
-    picture: Path | None = None  # PNG of the final frame
-    status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,73 @@
+"""`g1ctl run --hardware` with a real robot's config: the stack drives whatever G1 answers on that domain, no simulator.
+
+Here the G1 is `g1ctl robot --dds` started by hand, as a robot is powered on by hand; the config
+is a copy of `g1-dds.yaml` pointed at loopback. The run must not import MuJoCo itself.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
+
+from hw.shipped import config_dir
+from tests.conftest import g1ctl, one_line_error
+
+pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock, and the CLI
+
+DOMAIN = 20 + (os.getpid() * 7 + 150) % 200  # beside the `sim_dds_config` domains of this run
+
+
+def a_robot_config(tmp_path: Path) -> Path:
+    text = (config_dir("hardware") / "g1-dds.yaml").read_text()
+    assert "dds: {domain: 0, interface: eth0, peers: []," in text
+    path = tmp_path / "my-g1.yaml"
+    text = text.replace("dds: {domain: 0, interface: eth0, peers: [],", f"dds: {{domain: {DOMAIN}, interface: lo, peers: [127.0.0.1],")
+    # The stand-in robot starts standing in the default pose, off any gantry: a 3 s ramp under PD alone would tip it over.
+    path.write_text(text.replace("soft_start_time: 3.0", "soft_start_time: 0.2"))
+    return path
+
+
+def test_run_drives_a_robot_that_answers_on_the_configs_domain(tmp_path: Path) -> None:
+    robot = subprocess.Popen(
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(DOMAIN), "--duration", "60"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        report_path = tmp_path / "run.json"
+        args = ("--hardware", str(a_robot_config(tmp_path)), "--input", "scripted", "--duration", "4", "--no-planner", "--headless")
+        result = g1ctl("run", *args, "--report", str(report_path))
+        assert result.returncode == 0, result.stderr
+    finally:
+        robot.send_signal(signal.SIGTERM)
+        out, err = robot.communicate(timeout=20)
+    report = json.loads(report_path.read_text())
+    assert report["final_mode"] == "run" and report["falls"] == 0 and report["sim_seconds"] == pytest.approx(4.0, abs=0.1)
+    hw = report["hw"]
+    assert hw["released_mode"] == "ai" and hw["faults"] == 0 and hw["cycles"] > 1500 and hw["crc_errors"] == 0
+    counters = json.loads(out.strip().splitlines()[-1])
+    assert robot.returncode == 0, err
+    assert counters["commands"] > 1500 and counters["motion_mode"] == "" and counters["damping_commands"] >= 3
+    assert counters["sim_seconds"] > 3.5  # it walked: physics ran for the whole run
+
+
+def test_sim_refuses_a_real_robot_in_one_line(tmp_path: Path) -> None:
+    result = g1ctl("sim", "--duration", "1", "--hardware", str(a_robot_config(tmp_path)))
+    assert result.returncode == 2
+    assert "is a real robot: g1ctl sim simulates; drive it with g1ctl run --hardware" in one_line_error(result)
+
+
+def test_a_robot_run_imports_no_simulator() -> None:
+    code = (
+        "import sys; import controller.runtime.robot_run, controller.cli.sim, controller.cli.run; "
+        "assert 'mujoco' not in sys.modules and 'sim.robot' not in sys.modules, sorted(m for m in sys.modules if 'mujoco' in m)"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr
