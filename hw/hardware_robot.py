@@ -4,6 +4,7 @@
     ACTIVE/ACTIVATING --deactivate--> INACTIVE (damping, then motors disabled)
     any --fault--> ERROR (damping every cycle, latched) --rearm--> INACTIVE
 
+The lifecycle and the command path are `hw.lifecycle_robot`'s, shared with the G1 over DDS.
 `cycle()` is one exchange with every motor (the 500 Hz writer calls it): it turns the
 newest joint command into motor frames through the safety layer, sends them on every
 bus, collects the replies and runs the feedback checks. The controller only calls
@@ -21,20 +22,21 @@ import numpy as np
 
 from hw import g1
 from hw.drivers import BusCounters, MitBusDriver, MitMotor, Rs485BusDriver
-from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
+from hw.errors import BusError, LifecycleError, MotorNotFoundError
 from hw.feedback import FeedbackStore, MitReplyBank, MotorFeedback
 from hw.imu import SerialImu
 from hw.jointmap import HardwareConfig, JointConfig, load_motor_models
+from hw.lifecycle_robot import LifecycleRobot
 from hw.protocols import mit
-from hw.robot import Lifecycle, RobotInterface
-from hw.safety import JointLimits, command_is_finite, feedback_faults, limit_command
+from hw.robot import Lifecycle
+from hw.safety import JointLimits, feedback_faults
 from hw.transport import open_can, open_serial
 from hw.types import JointCommand, RobotState
 
 log = logging.getLogger(__name__)
 
 
-class HardwareRobot(RobotInterface):
+class HardwareRobot(LifecycleRobot):
     def __init__(
         self,
         cfg: HardwareConfig,
@@ -42,39 +44,16 @@ class HardwareRobot(RobotInterface):
         default_pose: tuple[float, ...] | None = None,
         stamp_clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        super().__init__()
+        gains = (np.array([cfg.joints[n].kp for n in joint_names]), np.array([cfg.joints[n].kd for n in joint_names]))
+        pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
+        super().__init__(joint_names, pose, stamp_clock, JointLimits.from_joint_map(joint_names, cfg.joints), gains, cfg.safety)
         self.cfg = cfg
-        self._names = joint_names
-        self.stamp_clock = stamp_clock
-        self.default_pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
-        self.limits = JointLimits.from_joint_map(joint_names, cfg.joints)
-        self.state = Lifecycle.UNCONFIGURED
-        self.faults: list[str] = []
-        self.fault_count = 0
-        self.clamped_values = 0
-        self.cycles = 0
         self._drivers: dict[str, MitBusDriver | Rs485BusDriver] = {}
         self._closed_counters = BusCounters()  # of buses already closed
         self.store = FeedbackStore(len(joint_names))
         self._slot_of: dict[str, tuple[MitBusDriver | Rs485BusDriver, int]] = {}  # joint -> (driver, motor id)
         self.imu: SerialImu | None = None
-        self._command: JointCommand | None = None
-        self._sent_q: np.ndarray | None = None
-        self._ramp: tuple[float, np.ndarray] | None = None
-        self._ramp_target = self.default_pose
-        self._settled: tuple[JointCommand | None, JointCommand | None] = (None, None)  # (written, limited) reused while unchanged
-        self._encoded: tuple[JointCommand | None, bytes] = (None, b"")  # (limited command, its CAN frames)
         self._has_serial = False
-        n = len(joint_names)
-        self._damp_kd = np.full(n, cfg.safety.damping_kd)
-        self._zeros = np.zeros(n)
-        self._q = np.zeros(n)
-        self._dq = np.zeros(n)
-        self._tau = np.zeros(n)
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        return self._names
 
     # -- lifecycle -------------------------------------------------------------------
     def configure(self, require_all: bool = True) -> None:
@@ -153,15 +132,7 @@ class HardwareRobot(RobotInterface):
         self._await_first_imu_frame()
         self._exchange(limp=True, timeout=self.cfg.safety.cycle_timeout * 4)
         self._update_state()
-        faults = self._check_feedback()
-        if faults:
-            self._enter_error(faults)
-            raise HardwareFault(f"cannot activate: {faults[0]}")
-        self._forget_settled()
-        self._ramp = (self.stamp_clock(), self._q.copy())
-        self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
-        self._sent_q = self._q.copy()
-        self.state = Lifecycle.ACTIVATING
+        self._start_ramp(target_pose)
 
     def _await_first_imu_frame(self) -> None:
         """Give the IMU's first frame up to its timeout (wall clock) to arrive before the activation check.
@@ -194,37 +165,13 @@ class HardwareRobot(RobotInterface):
         self._ramp, self._command = None, None
         self._forget_settled()
 
-    def rearm(self) -> None:
-        """Leave ERROR explicitly once the feedback is healthy again; the robot is then INACTIVE."""
-        if self.state is not Lifecycle.ERROR:
-            raise LifecycleError(f"rearm needs the robot in error, it is {self.state.value}")
-        self._exchange(limp=False, damping=True)
-        self._update_state()
-        faults = self._check_feedback()
-        if faults:
-            raise HardwareFault(f"cannot re-arm: {faults[0]}")
-        self.faults = []
-        self.state = Lifecycle.INACTIVE
-
     # -- control ---------------------------------------------------------------------
-    def write(self, command: JointCommand) -> None:
-        """Newest command for the next cycles. The robot keeps it: do not change its arrays afterwards."""
-        if not command_is_finite(command):
-            self._enter_error(["non-finite joint command from the controller"])
-            return
-        self._command = command
-
-    def damp(self) -> None:
-        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
+    def _damp_now(self) -> None:
+        if self._drivers:
             self._exchange(limp=False, damping=True)
 
-    def enter_damping(self, reason: str) -> None:
-        """Latch damping on purpose (not a fault): every cycle damps until `rearm()`."""
-        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
-            raise LifecycleError(f"damping needs a configured robot, it is {self.state.value}")
-        log.info("damping: %s", reason)
-        self.state, self.faults, self._command = Lifecycle.ERROR, [reason], None
-        self._exchange(limp=False, damping=True)
+    def _refresh(self) -> None:
+        self._update_state()
 
     def driver_of(self, joint_name: str) -> MitBusDriver | Rs485BusDriver:
         return self._slot_of[joint_name][0]
@@ -260,44 +207,6 @@ class HardwareRobot(RobotInterface):
             faults = self._check_feedback()
             if faults:
                 self._enter_error(faults)
-
-    def _next_command(self) -> JointCommand:
-        safety = self.cfg.safety
-        if self.state is Lifecycle.ACTIVATING and self._ramp is not None:
-            start_t, start_q = self._ramp
-            alpha = min((self.stamp_clock() - start_t) / max(safety.soft_start_time, 1e-9), 1.0)
-            q = start_q + alpha * (self._ramp_target - start_q)
-            kp = np.array([self.cfg.joints[n].kp for n in self._names])
-            kd = np.array([self.cfg.joints[n].kd for n in self._names])
-            cmd = JointCommand(q=q, dq=self._zeros, kp=kp, kd=kd, tau_ff=self._zeros)
-            if alpha >= 1.0:
-                self.state = Lifecycle.ACTIVE
-                self._ramp = None
-                self._command = cmd
-        elif self._command is None:
-            return self._hold_command()
-        else:
-            cmd = self._command
-            written, settled = self._settled
-            if cmd is written and settled is not None:
-                # The controller writes at 50 Hz, this runs at 500 Hz: a command that already
-                # passed the limits unchanged passes them again, frames and all.
-                return settled
-        limited, changed = limit_command(cmd, self.limits, self._sent_q, safety.max_position_step)
-        self.clamped_values += changed
-        self._sent_q = limited.q
-        self._settled = (cmd, limited) if changed == 0 and self.state is Lifecycle.ACTIVE else (None, None)
-        return limited
-
-    def _forget_settled(self) -> None:
-        """After any state change a command must pass the limits (and the step limit) afresh."""
-        self._settled, self._encoded = (None, None), (None, b"")
-
-    def _hold_command(self) -> JointCommand:
-        q = self._sent_q if self._sent_q is not None else self._q
-        return JointCommand(
-            q=q, dq=self._zeros, kp=np.array([self.cfg.joints[n].kp for n in self._names]), kd=self._damp_kd, tau_ff=self._zeros
-        )
 
     def _motor_side(self, limp: bool, damping: bool, command: JointCommand | None) -> tuple[np.ndarray, ...]:
         """Joint side -> motor side for every joint at once (`hw.jointmap.joint_to_motor` on arrays)."""
@@ -392,17 +301,6 @@ class HardwareRobot(RobotInterface):
             now,
             safety,
         )
-
-    def _enter_error(self, faults: list[str]) -> None:
-        if self.state is not Lifecycle.ERROR:
-            log.error("hardware fault, damping all joints: %s", "; ".join(faults))
-            self.fault_count += 1
-            self.faults = faults
-        self.state = Lifecycle.ERROR
-        self._command = None
-        self._forget_settled()
-        if self._drivers:
-            self._exchange(limp=False, damping=True)
 
     # -- reporting -------------------------------------------------------------------
     def counters(self) -> BusCounters:

@@ -1,4 +1,4 @@
-"""The G1 over its low-level DDS topics, with the same lifecycle and safety layer as the bus robot.
+"""The G1 over its low-level DDS topics, with the same lifecycle and safety layer as the bus robot (`hw.lifecycle_robot`).
 
     UNCONFIGURED --configure--> INACTIVE --activate--> ACTIVATING --ramp done--> ACTIVE
     ACTIVE/ACTIVATING --deactivate--> INACTIVE (damping, then no more commands)
@@ -29,10 +29,11 @@ from hw.dds import cdr
 from hw.dds.cdr import JointArrays
 from hw.dds.config import DdsHardwareConfig
 from hw.dds.link import DdsLink, LinkCounters
-from hw.errors import HardwareFault, LifecycleError
+from hw.errors import LifecycleError
+from hw.lifecycle_robot import LifecycleRobot
 from hw.protocols import unitree_hg as hg
-from hw.robot import Lifecycle, RobotInterface
-from hw.safety import JointLimits, command_is_finite, limit_command
+from hw.robot import Lifecycle
+from hw.safety import JointLimits
 from hw.types import JointCommand, RobotState
 
 log = logging.getLogger(__name__)
@@ -54,7 +55,7 @@ class JointReading:
     mode: int  # the motor's mode as the robot reports it (1: enabled)
 
 
-class DdsRobot(RobotInterface):
+class DdsRobot(LifecycleRobot):
     def __init__(
         self,
         cfg: DdsHardwareConfig,
@@ -64,45 +65,23 @@ class DdsRobot(RobotInterface):
         release: Callable[[Any], str | None] | None = None,
     ) -> None:
         """`release(session)` frees the robot from its high-level motion service (default: the motion switcher)."""
-        super().__init__()
         if joint_names != g1.JOINT_NAMES:
             raise LifecycleError("the G1 over DDS has the G1's 29 joints in the standard order (motor slots 0..28)")
+        gains = (np.array([cfg.joints[n].kp for n in joint_names]), np.array([cfg.joints[n].kd for n in joint_names]))
+        pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
+        super().__init__(joint_names, pose, clock, JointLimits.from_joint_map(joint_names, cfg.joints), gains, cfg.safety)
         self.cfg = cfg
-        self._names = joint_names
-        self.stamp_clock = clock
         self._release = release
-        self.default_pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
-        self.limits = JointLimits.from_joint_map(joint_names, cfg.joints)
-        self.state = Lifecycle.UNCONFIGURED
-        self.faults: list[str] = []
-        self.fault_count = 0
-        self.clamped_values = 0
-        self.cycles = 0
         self.released_mode: str | None = None  # the high-level mode released at configure
         self._commanded = False  # the robot is this host's to command (released, activated, damped): only then does it send
         self.link: DdsLink | None = None
         self._closed_counters = LinkCounters()
         n = len(joint_names)
-        self._kp = np.array([cfg.joints[name].kp for name in joint_names])
-        self._kd = np.array([cfg.joints[name].kd for name in joint_names])
-        self._damp_kd = np.full(n, cfg.safety.damping_kd)
-        self._zeros = np.zeros(n)
-        self._q, self._dq, self._tau = np.zeros(n), np.zeros(n), np.zeros(n)
         self._quat, self._gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
         self._temperature, self._error_bits = np.zeros(n), np.zeros(n, dtype=np.uint32)
-        self._applied: JointArrays | None = None  # the state the joint arrays below were last filled from
-        self._command: JointCommand | None = None
-        self._sent_q: np.ndarray | None = None
-        self._ramp: tuple[float, np.ndarray] | None = None
-        self._ramp_target = self.default_pose
-        self._settled: tuple[JointCommand | None, JointCommand | None] = (None, None)  # (written, limited)
-        self._encoded: tuple[JointCommand | None, bytes] = (None, b"")  # (limited command, its CDR)
+        self._applied: JointArrays | None = None  # the state the joint arrays were last filled from
         self._template = hg.new_low_cmd(mode_pr=cfg.mode_pr)
         self._template["motor_cmd"]["mode"][: g1.NUM_JOINTS] = hg.MOTOR_ENABLE
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        return self._names
 
     # -- lifecycle -------------------------------------------------------------------
     def configure(self) -> None:
@@ -133,17 +112,10 @@ class DdsRobot(RobotInterface):
         """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
         if self.state is not Lifecycle.INACTIVE:
             raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
+        self._commanded = True  # from here on this host commands the robot: every exit damps it
         self._receive()
         self._update_state()
-        faults = self._check_feedback()
-        if faults:
-            self._enter_error(faults)
-            raise HardwareFault(f"cannot activate: {faults[0]}")
-        self._forget_settled()
-        self._ramp = (self.stamp_clock(), self._q.copy())
-        self._ramp_target = self.default_pose if target_pose is None else np.asarray(target_pose, float).copy()
-        self._sent_q = self._q.copy()
-        self.state, self._commanded = Lifecycle.ACTIVATING, True
+        self._start_ramp(target_pose)
 
     def deactivate(self) -> None:
         """Damping for a few cycles, then silence (the robot's controller then holds the motors limp)."""
@@ -152,44 +124,23 @@ class DdsRobot(RobotInterface):
         for i in range(DEACTIVATE_DAMPING_CYCLES):  # one per cycle: the robot keeps only the newest command it has not applied
             if i:
                 time.sleep(1.0 / g1.CONTROL_CYCLE_HZ)
-            self._send_damping()
+            self._damp_now()
         if self.state is not Lifecycle.ERROR:
             self.state = Lifecycle.INACTIVE
         self._ramp, self._command = None, None
         self._forget_settled()
 
     def rearm(self) -> None:
-        """Leave ERROR explicitly once the robot's state is healthy again; the robot is then INACTIVE."""
-        if self.state is not Lifecycle.ERROR:
-            raise LifecycleError(f"rearm needs the robot in error, it is {self.state.value}")
-        self._send_damping()
-        self._receive()
-        faults = self._check_feedback()
-        if faults:
-            raise HardwareFault(f"cannot re-arm: {faults[0]}")
-        self.faults = []
-        self.state = Lifecycle.INACTIVE
+        """Leave ERROR once the robot's newest state is healthy again; the robot is then INACTIVE."""
+        if self.link is not None:
+            self._receive()
+        super().rearm()
 
     # -- control ---------------------------------------------------------------------
-    def write(self, command: JointCommand) -> None:
-        """Newest command for the next cycles. The robot keeps it: do not change its arrays afterwards."""
-        if not command_is_finite(command):
-            self._enter_error(["non-finite joint command from the controller"])
-            return
-        self._command = command
-
-    def damp(self) -> None:
-        """Damping, once this host has commanded the robot (a host that only listened sends nothing)."""
-        if self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED) and self._commanded:
-            self._send_damping()
-
     def enter_damping(self, reason: str) -> None:
         """Latch damping on purpose (not a fault): every cycle damps until `rearm()`."""
-        if self.state in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED):
-            raise LifecycleError(f"damping needs a configured robot, it is {self.state.value}")
-        log.info("damping: %s", reason)
-        self.state, self.faults, self._command, self._commanded = Lifecycle.ERROR, [reason], None, True
-        self._send_damping()
+        self._commanded = True
+        super().enter_damping(reason)
 
     def cycle(self, wait_s: float = 0.0) -> None:
         """One exchange: the command (or damping) out, then the newest state in and its checks.
@@ -203,7 +154,7 @@ class DdsRobot(RobotInterface):
         if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
             self._send(self._next_command())
         elif self.state is Lifecycle.ERROR:
-            self._send_damping()
+            self._damp_now()
         if wait_s > 0:
             self.link.wait(wait_s)
         self._receive()
@@ -211,40 +162,6 @@ class DdsRobot(RobotInterface):
             faults = self._check_feedback()
             if faults:
                 self._enter_error(faults)
-
-    def _next_command(self) -> JointCommand:
-        safety = self.cfg.safety
-        if self.state is Lifecycle.ACTIVATING and self._ramp is not None:
-            start_t, start_q = self._ramp
-            alpha = min((self.stamp_clock() - start_t) / max(safety.soft_start_time, 1e-9), 1.0)
-            cmd = JointCommand(
-                q=start_q + alpha * (self._ramp_target - start_q), dq=self._zeros, kp=self._kp, kd=self._kd, tau_ff=self._zeros
-            )
-            if alpha >= 1.0:
-                self.state, self._ramp, self._command = Lifecycle.ACTIVE, None, cmd
-        elif self._command is None:
-            return self._hold_command()
-        else:
-            cmd = self._command
-            written, settled = self._settled
-            if cmd is written and settled is not None:
-                # The controller writes at 50 Hz, this runs at 500 Hz: a command that already
-                # passed the limits unchanged passes them again, encoded bytes and all.
-                return settled
-        limited, changed = limit_command(cmd, self.limits, self._sent_q, safety.max_position_step)
-        self.clamped_values += changed
-        self._sent_q = limited.q
-        self._settled = (cmd, limited) if changed == 0 and self.state is Lifecycle.ACTIVE else (None, None)
-        return limited
-
-    def _hold_command(self) -> JointCommand:
-        self._update_state()
-        q = self._sent_q if self._sent_q is not None else self._q
-        return JointCommand(q=q, dq=self._zeros, kp=self._kp, kd=self._damp_kd, tau_ff=self._zeros)
-
-    def _forget_settled(self) -> None:
-        """After any state change a command must pass the limits (and the step limit) afresh."""
-        self._settled, self._encoded = (None, None), (None, b"")
 
     def _send(self, command: JointCommand) -> None:
         assert self.link is not None
@@ -256,7 +173,8 @@ class DdsRobot(RobotInterface):
             self._encoded = (command, self.link.encode(self._template))
         self.link.send_cdr(self._encoded[1])
 
-    def _send_damping(self) -> None:
+    def _damp_now(self) -> None:
+        """Damping, once the robot is this host's (a host that only listened sends nothing)."""
         if self.link is not None and self._commanded:
             self._update_state()  # damping holds no position, but a command carries the measured one
             self._send(JointCommand(q=self._q, dq=self._zeros, kp=self._zeros, kd=self._damp_kd, tau_ff=self._zeros))
@@ -264,6 +182,9 @@ class DdsRobot(RobotInterface):
     def _receive(self) -> None:
         assert self.link is not None
         self.link.poll()
+
+    def _refresh(self) -> None:
+        self._update_state()
 
     def _update_state(self) -> None:
         """The newest state's joints and IMU into the robot's arrays; only when someone reads them (the 500 Hz checks read in place)."""
@@ -324,19 +245,11 @@ class DdsRobot(RobotInterface):
         return faults
 
     def _enter_error(self, faults: list[str]) -> None:
-        if self.state is not Lifecycle.ERROR:
-            log.error("hardware fault, damping all joints: %s", "; ".join(faults))
-            self.fault_count += 1
-            self.faults = faults
         link = self.link
         if link is not None and link.reported_mode_machine is not None and link.reported_mode_machine != link.mode_machine:
             # The robot refuses commands stamped with another mode_machine: damping goes out with the one it reports now.
             link.mode_machine = link.reported_mode_machine
-            self._encoded = (None, b"")
-        self.state = Lifecycle.ERROR
-        self._command = None
-        self._forget_settled()
-        self._send_damping()
+        super()._enter_error(faults)
 
     # -- reading ---------------------------------------------------------------------
     def read(self) -> RobotState:

@@ -11,7 +11,7 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
 
-from tests.conftest import g1ctl, one_line_error
+from tests.conftest import g1ctl
 
 pytestmark = pytest.mark.slow  # the CLI and the robot process, on the wall clock
 
@@ -30,9 +30,3 @@ def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_co
     assert hw["cycles"] > 2000 and hw["states_received"] > 2000 and hw["crc_errors"] == 0 and hw["faults"] == 0
     assert robot["commands"] > 2000 and robot["crc_errors"] == 0 and robot["mode_machine_mismatches"] == 0
     assert robot["damping_commands"] >= 3  # the host damped the robot on its way out
-
-
-def test_a_real_robot_config_is_refused_by_the_simulator() -> None:
-    result = g1ctl("sim", "--duration", "1", "--hardware", "g1-dds")
-    assert result.returncode == 2
-    assert "is a real robot ('simulated: false')" in one_line_error(result)
