@@ -11,14 +11,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 from hw.dds.config import DdsHardwareConfig, dds_config_from, is_dds_config
 from hw.errors import ConfigError
-from hw.g1 import DAMPING_KD, EFFORT_LIMITS, JOINT_NAMES
+from hw.g1 import DAMPING_KD, JOINT_NAMES
 from hw.protocols.mit import MitRanges
 from hw.shipped import config_dir
-from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset
+from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset, with_g1_torque_limits
 
 
 @dataclass(frozen=True)
@@ -153,19 +153,6 @@ def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOIN
     cfg = from_dict(HardwareConfig, with_g1_torque_limits(data), str(path))
     validate(cfg, str(path), expected_joints, load_motor_models())
     return cfg
-
-
-def with_g1_torque_limits(data: Any) -> Any:
-    """The raw YAML with `torque_limit` filled in from `hw.g1.EFFORT_LIMITS` on every G1 joint
-    that leaves it out; anything else is left for `from_dict` to check."""
-    joints = data.get("joints") if isinstance(data, dict) else None
-    if not isinstance(joints, dict):
-        return data
-    filled = {
-        name: {"torque_limit": EFFORT_LIMITS[name], **joint} if isinstance(joint, dict) and name in EFFORT_LIMITS else joint
-        for name, joint in joints.items()
-    }
-    return {**data, "joints": filled}
 
 
 def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:

@@ -14,8 +14,8 @@ from typing import Any, Literal
 
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
-from hw.g1 import DAMPING_KD, EFFORT_LIMITS, JOINT_NAMES
-from hw.yamlconfig import from_dict
+from hw.g1 import DAMPING_KD, JOINT_NAMES
+from hw.yamlconfig import from_dict, with_g1_torque_limits
 
 
 @dataclass(frozen=True)
@@ -66,18 +66,13 @@ def is_dds_config(data: Any) -> bool:
 
 
 def dds_config_from(data: Any, source: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> DdsHardwareConfig:
-    """Build and check a DDS hardware config from its parsed YAML."""
+    """Build and check a DDS hardware config from its parsed YAML (the joint names first: a misspelt one is named as such)."""
     joints = data.get("joints") if isinstance(data, dict) else None
-    if isinstance(joints, dict):  # torque limits default to the G1's own
-        joints = {
-            n: {"torque_limit": EFFORT_LIMITS[n], **j} if isinstance(j, dict) and n in EFFORT_LIMITS else j for n, j in joints.items()
-        }
-        data = {**data, "joints": joints}
-    cfg = from_dict(DdsHardwareConfig, data, source)
-    missing = [j for j in expected_joints if j not in cfg.joints]
-    if missing:
+    names = list(joints) if isinstance(joints, dict) else []
+    missing = [j for j in expected_joints if j not in names]
+    if isinstance(joints, dict) and missing:
         raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
-    unknown = [j for j in cfg.joints if j not in expected_joints]
+    unknown = [j for j in names if j not in expected_joints]
     if unknown:
         raise ConfigError(f"{source}: unknown joints in the joint map: {', '.join(unknown)}")
-    return cfg
+    return from_dict(DdsHardwareConfig, with_g1_torque_limits(data), source)  # torque limits default to the G1's own
