@@ -54,7 +54,7 @@ def test_run_drives_a_robot_that_answers_on_the_configs_domain(tmp_path: Path) -
     assert hw["released_mode"] == "ai" and hw["faults"] == 0 and hw["cycles"] > 1500 and hw["crc_errors"] == 0
     counters = json.loads(out.strip().splitlines()[-1])
     assert robot.returncode == 0, err
-    assert counters["commands"] > 1500 and counters["motion_mode"] == "" and counters["damping_commands"] >= 3
+    assert counters["commands"] > 1500 and counters["motion_mode"] == "" and counters["damping_commands"] >= 1
     assert counters["sim_seconds"] > 3.5  # it walked: physics ran for the whole run
 
 

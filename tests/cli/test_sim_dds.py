@@ -31,4 +31,4 @@ def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_co
     assert hw["released_mode"] == "ai" and robot["motion_mode"] == "" and robot["motion_release_requests"] == 1
     assert hw["cycles"] > 2000 and hw["states_received"] > 2000 and hw["crc_errors"] == 0 and hw["faults"] == 0
     assert robot["commands"] > 2000 and robot["crc_errors"] == 0 and robot["mode_machine_mismatches"] == 0
-    assert robot["damping_commands"] >= 3  # the host damped the robot on its way out
+    assert robot["damping_commands"] >= 1  # the host damped the robot on its way out (keep-last-1: it may see one of three)
