@@ -1,7 +1,11 @@
-"""`g1ctl run`: drive the simulated G1 through the planner, the way a person would.
+"""`g1ctl run`: drive the simulated G1, or a real one, through the planner, the way a person would.
 
-g1ctl run [--input auto|keyboard|gamepad|scripted] [--scenario walk_turn_stop] [--video runs/run.mp4]
-          [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can] [--duration S] [--headless]
+g1ctl run [--input auto|keyboard|gamepad|scripted|unitree-remote] [--scenario walk_turn_stop] [--video runs/run.mp4]
+          [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can|sim-dds|g1-dds|PATH] [--duration S] [--headless]
+          [--rt-priority 50] [--cpu N]
+
+With a real G1's config (`simulated: false`, e.g. a copy of g1-dds.yaml) the run drives that robot
+(`controller/runtime/robot_run.py`, no simulator): its own remote is the default input.
 
 With a display: MuJoCo's viewer, the planned motion drawn as a ghost beside the robot, held
 to the wall clock. Without one: headless. `--input auto` takes a gamepad when one is plugged
@@ -18,6 +22,7 @@ import sys
 from pathlib import Path
 
 from controller.inputs.registry import INPUTS
+from hw.errors import ConfigError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -37,6 +42,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--headless", action="store_true", help="no viewer even where a display exists")
     run.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--rt-priority", type=int, default=0, help="on a real G1: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
+    run.add_argument("--cpu", type=int, default=None, help="on a real G1: pin the run to this CPU")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,8 +60,10 @@ def run(args: argparse.Namespace) -> int:
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
-        assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(),
+        assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(), rt_priority=args.rt_priority, cpu=args.cpu,
     )  # fmt: skip
+    if not on_robot and (args.rt_priority or args.cpu is not None):
+        raise ConfigError("--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy)")
     if source != "scripted":
         print(f"g1ctl run: {source} input, {'viewer' if viewer else 'headless'}; Ctrl-C ends the run", file=sys.stderr)
     return run_and_summarize(cfg, on_robot=True)

@@ -33,6 +33,7 @@ from hw.dds.config import DdsHardwareConfig
 from hw.dds.robot import DdsRobot
 from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_robot_config
+from hw.realtime import request_realtime
 
 MAX_TILT_DEG = 60.0  # the simulator's fall threshold (`sim.robot.FallConfig`), from the IMU here
 
@@ -65,6 +66,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
     tracker = make_tracker(cfg.tracker or ("decoupled" if cfg.planner else "velocity"), TrackerSpec(cfg.policy, assets, g1.JOINT_NAMES))
     if tracker.needs_plan and not cfg.planner:
         raise ConfigError(f"the {tracker.name} tracker follows planned whole-body motion: add --planner")
+    scheduling = request_realtime(cfg.rt_priority, cfg.cpu)  # before any thread starts: they inherit it
     clock = RunClock()
     error: Exception | None = None
     interrupted = False
@@ -108,6 +110,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
         report: dict[str, Any] = {"robot": str(cfg.hardware), "input": cfg.input, "policy": cfg.policy, "seed": cfg.seed}
         report |= session.report()
         report |= {"wall_seconds": round(time.perf_counter() - wall_start, 4), "overruns": loop.overruns, "interrupted": interrupted}
+        report["scheduling"] = scheduling.describe()
         if error is not None:
             report["error"] = f"{type(error).__name__}: {error}"
     report["hw"] = backend.report()  # after closing: the counters include the damped shutdown

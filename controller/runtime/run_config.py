@@ -30,3 +30,5 @@ class SimRunConfig:
     faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
     picture: Path | None = None  # PNG of the final frame
     status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
+    rt_priority: int = 0  # on a real robot: SCHED_FIFO priority of the run (0: normal scheduling), see hw.realtime
+    cpu: int | None = None  # on a real robot: pin the run to this CPU
