@@ -13,7 +13,6 @@ The tests check these bytes against Cyclone DDS's own serializer.
 from __future__ import annotations
 
 import array
-import math
 import struct
 import sys
 import zlib
@@ -135,25 +134,21 @@ def _field_offset(dtype: np.dtype[Any], name: str) -> int:
 MODE_MACHINE_AT = 4 + _field_offset(_STATE_HEAD, "mode_machine")
 _Q_AT, _TEMPERATURE_AT, _MOTORSTATE_AT = (4 + _STATE_MOTORS_AT + _field_offset(_STATE_MOTOR, f) for f in ("q", "temperature", "motorstate"))
 _IMU_AT = 4 + _field_offset(_STATE_HEAD, "quaternion")
-# From the IMU on: its 13 floats (quaternion, gyroscope, accelerometer, rpy), its temperature and motor 0's mode (skipped),
-# then per joint from `q`: q, dq, ddq, tau_est, temperature[2], motorstate after vol and sensor, on to the next `q`.
-_HEALTH = struct.Struct("<13f4x" + "4f2h12xI20x" * hg.NUM_JOINTS)
-if _Q_AT - _IMU_AT != 56 or _MOTORSTATE_AT - _Q_AT != 32 or _HEALTH.size != 56 + hg.NUM_JOINTS * _STATE_MOTOR.itemsize:
+# Per joint from `q`: temperature[2] and motorstate (skipping q, dq, ddq, tau_est, vol, sensor), on to the next `q`.
+_HEALTH = struct.Struct("<" + "16x2h12xI20x" * hg.NUM_JOINTS)
+if _MOTORSTATE_AT - _Q_AT != 32 or _TEMPERATURE_AT - _Q_AT != 16 or _HEALTH.size != hg.NUM_JOINTS * _STATE_MOTOR.itemsize:
     raise RuntimeError("the LowState_ health layout no longer matches the CDR layout")
 
 
 class StateHealth(NamedTuple):
     max_temperature: int  # deg C, the hottest of the 29 motors' sensors
     error_bits: bool  # some motor reports a non-zero motorstate
-    finite: bool  # every joint reading and the IMU are finite
 
 
 def state_health(data: bytes) -> StateHealth:
-    """What the safety checks need of a (CRC-checked) `LowState_`, read with one `struct` call: a few microseconds at 500 Hz."""
-    values = _HEALTH.unpack_from(data, _IMU_AT)
-    first = 13 + 4  # the first joint's temperature
-    hottest = max(max(values[first::7]), max(values[first + 1 :: 7]))
-    return StateHealth(hottest, any(values[first + 2 :: 7]), math.isfinite(sum(values)))  # NaN and inf carry through a sum
+    """What the 500 Hz checks need of a (CRC-checked) `LowState_`, read with one `struct` call (87 integers, no floats)."""
+    values = _HEALTH.unpack_from(data, _Q_AT)
+    return StateHealth(max(max(values[0::3]), max(values[1::3])), any(values[2::3]))
 
 
 class JointArrays(NamedTuple):

@@ -38,6 +38,7 @@ from hw.types import JointCommand, RobotState
 
 log = logging.getLogger(__name__)
 
+NON_FINITE = "non-finite values in the robot's state"
 DEACTIVATE_DAMPING_CYCLES = 3  # damping frames sent on deactivate before the host falls silent
 
 
@@ -159,7 +160,7 @@ class DdsRobot(LifecycleRobot):
             self.link.wait(wait_s)
         self._receive()
         if self.state in (Lifecycle.ACTIVE, Lifecycle.ACTIVATING):
-            faults = self._check_feedback()
+            faults = self._cycle_faults()
             if faults:
                 self._enter_error(faults)
 
@@ -199,20 +200,25 @@ class DdsRobot(LifecycleRobot):
         self._quat[:], self._gyro[:] = arrays.imu[:4], arrays.imu[4:7]
 
     def _check_feedback(self) -> list[str]:
-        """Reasons the robot's state is unsafe right now (empty when all is well)."""
+        """Everything wrong with the robot's state now (activation, re-arm): the cycle's checks and non-finite values."""
+        return self._fault_reasons(self.stamp_clock())
+
+    def _cycle_faults(self) -> list[str]:
+        """The checks every cycle runs, the common case in one expression: staleness, bad CRCs, `mode_machine`, error
+        bits, temperature. Non-finite values are checked where the state is used (`read`); any doubt is spelled out."""
         link, safety = self.link, self.cfg.safety
         assert link is not None
         now = self.stamp_clock()
-        if (  # the common case in one expression, every cycle; any doubt is spelled out by `_fault_reasons`
+        if (
             link.data is not None
             and now - link.state_time <= safety.state_timeout
             and link.counters.bad_in_a_row < safety.max_bad_states
             and link.reported_mode_machine == link.mode_machine
         ):
             health = cdr.state_health(link.data)
-            if health.finite and not health.error_bits and health.max_temperature <= safety.max_temperature:
+            if not health.error_bits and health.max_temperature <= safety.max_temperature:
                 return []
-        return self._fault_reasons(now)
+        return [f for f in self._fault_reasons(now) if not f.startswith(NON_FINITE)]
 
     def _fault_reasons(self, now: float) -> list[str]:
         assert self.link is not None
@@ -241,7 +247,7 @@ class DdsRobot(LifecycleRobot):
             ]
         if not math.isfinite(float(arrays.motion.sum()) + float(arrays.imu.sum())):
             bad = [self._names[i] for i in np.flatnonzero(~np.isfinite(arrays.motion).all(axis=1))]
-            faults.append(f"non-finite values in the robot's state ({', '.join(bad) or 'IMU'})")
+            faults.append(f"{NON_FINITE} ({', '.join(bad) or 'IMU'})")
         return faults
 
     def _enter_error(self, faults: list[str]) -> None:
@@ -253,7 +259,11 @@ class DdsRobot(LifecycleRobot):
 
     # -- reading ---------------------------------------------------------------------
     def read(self) -> RobotState:
+        """The newest state; a non-finite value in it latches damping before anything can use it."""
         self._update_state()
+        finite = math.isfinite(float(self._q.sum() + self._dq.sum() + self._quat.sum() + self._gyro.sum()))
+        if not finite and self.state not in (Lifecycle.UNCONFIGURED, Lifecycle.CLOSED, Lifecycle.ERROR):
+            self._enter_error([f for f in self._fault_reasons(self.stamp_clock()) if f.startswith(NON_FINITE)] or [NON_FINITE])
         return RobotState(
             time=self.stamp_clock(),
             joint_pos=self._q.copy(),

@@ -3,8 +3,9 @@
 Each is what a host meets on a real robot: `stale` (the robot stops publishing `LowState_`:
 cable out, main board hung), `bad-crc` (every state corrupted on the wire), `motor-error` (a
 motor reports error bits in `motorstate`), `hot` (a motor past its temperature limit),
-`mode-machine` (the robot reports another type code and refuses commands stamped with the
-old one), `exit` (the robot process dies). Given as `KIND@SECONDS`, counted from the first
+`nan` (a joint reads NaN: a broken encoder or firmware), `mode-machine` (the robot reports
+another type code and refuses commands stamped with the old one), `exit` (the robot process
+dies). Given as `KIND@SECONDS`, counted from the first
 command the robot takes. Pure functions on `LowState_` records; the process applies them.
 """
 
@@ -17,7 +18,7 @@ import numpy as np
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
 
-KINDS = ("stale", "bad-crc", "motor-error", "hot", "mode-machine", "exit")
+KINDS = ("stale", "bad-crc", "motor-error", "hot", "nan", "mode-machine", "exit")
 FAULTY_MOTOR = 3  # left_knee_joint: the drills' motor
 MOTOR_ERROR_BITS = 0x0000_0020  # any non-zero motorstate is an error to the host
 HOT_C = 95
@@ -50,13 +51,15 @@ def active(faults: tuple[RobotFault, ...], since_first_command: float | None) ->
 
 def tamper(record: np.ndarray, kinds: frozenset[str]) -> np.ndarray:
     """The `LowState_` the faulty robot publishes instead of `record` (CRC recomputed, or broken for `bad-crc`)."""
-    if not kinds & {"motor-error", "hot", "bad-crc"}:
+    if not kinds & {"motor-error", "hot", "nan", "bad-crc"}:
         return record
     out = record.copy()
     if "motor-error" in kinds:
         out["motor_state"]["motorstate"][FAULTY_MOTOR] = MOTOR_ERROR_BITS
     if "hot" in kinds:
         out["motor_state"]["temperature"][FAULTY_MOTOR] = HOT_C
+    if "nan" in kinds:
+        out["motor_state"]["q"][FAULTY_MOTOR] = np.nan
     out = hg.with_crc(out)
     if "bad-crc" in kinds:
         out["crc"] ^= 0xDEAD

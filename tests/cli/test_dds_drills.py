@@ -44,6 +44,8 @@ def _drive_until_error(robot: DdsRobot, seconds: float) -> float:
     deadline = start + seconds
     while robot.state is not Lifecycle.ERROR and time.monotonic() < deadline:
         robot.cycle()
+        if robot.cycles % 10 == 0:
+            robot.read()  # as the controller does at 50 Hz: non-finite values are caught where the state is used
         time.sleep(0.002)
     for _ in range(20):  # damping keeps going out while latched
         robot.cycle()
@@ -58,6 +60,7 @@ def _drive_until_error(robot: DdsRobot, seconds: float) -> float:
         ("bad-crc", r"LowState_s in a row with a bad CRC"),
         ("motor-error", r"left_knee_joint: motor error bits 0x00000020"),
         ("hot", r"left_knee_joint: over-temperature 95 C \(limit 85 C\)"),
+        ("nan", r"non-finite values in the robot's state \(left_knee_joint\)"),
         ("mode-machine", r"the robot's mode_machine changed from 5 to 6"),
     ],
 )
