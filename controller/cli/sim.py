@@ -3,6 +3,7 @@
 g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--tracker velocity] [--duration S] [--seed N]
           [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
           [--input scripted|keyboard|gamepad|unitree-remote] [--hardware sim-can|sim-mixed|sim-dds|PATH] [--faults FILE] [--progress]
+          [--perturb push|rough|FILE]
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         default=None,
         help="through simulated hardware: its codecs and buses (sim-can, sim-mixed), or the G1 over DDS (sim-dds)",
     )
+    sim.add_argument("--perturb", default=None, help="perturbations: a shipped set (push, rough) or a YAML (sim/perturbations.py)")
     sim.add_argument("--faults", default=None, help="with --hardware: YAML of faults to inject per bus (configs/faults/)")
     sim.add_argument("--realtime", action="store_true", help="pace simulated time to the wall clock")
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
@@ -52,13 +54,14 @@ def run(args: argparse.Namespace) -> int:
 
         use_headless_gl()  # before MuJoCo is imported, which fixes its OpenGL backend
     from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
+    from sim.perturbations import load_perturbations  # noqa: PLC0415
 
     cfg = SimRunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=args.planner, duration=args.duration, seed=args.seed,
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
-        status=args.status,
+        status=args.status, perturbations=load_perturbations(args.perturb) if args.perturb else None,
     )  # fmt: skip
     return run_and_summarize(cfg)
 

@@ -7,6 +7,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from sim.perturbations import Perturbations
 
 
 @dataclass(frozen=True)
@@ -30,5 +34,6 @@ class SimRunConfig:
     faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
     picture: Path | None = None  # PNG of the final frame
     status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
+    perturbations: Perturbations | None = None  # pushes, friction, payload, motor strength, latency, noise (`sim.perturbations`)
     rt_priority: int = 0  # on a real robot: SCHED_FIFO priority of the run (0: normal scheduling), see hw.realtime
     cpu: int | None = None  # on a real robot: pin the run to this CPU

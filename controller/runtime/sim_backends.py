@@ -10,14 +10,18 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from controller.runtime.backend import Backend
 from controller.runtime.hardware_backend import HardwareBackend
+from hw import g1
 from hw.emulation.faults import load_faults
 from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import load_hardware_config
 from hw.types import RobotState
 from sim.hardware_twin import MuJoCoPlant
+from sim.perturbations import Perturbations, PerturbedRobot, push_schedule
 from sim.robot import SimRobot
 
 # The simulated robot starts in the default pose, so the soft start has nothing to ramp;
@@ -47,6 +51,40 @@ class DirectSimBackend(Backend):
 
     def close(self) -> None:
         self.sim.close()
+
+
+class PerturbedSimBackend(DirectSimBackend):
+    """The simulated G1 under `Perturbations`: pushes on the pelvis at their times (physics stepped up to each
+    push's start and end), the controller's view and commands through `PerturbedRobot`; ground truth unperturbed."""
+
+    def __init__(self, truth: SimRobot, perturbations: Perturbations, duration: float, seed: int) -> None:
+        super().__init__(truth)
+        rng = np.random.default_rng(seed)  # the run's one generator: the same seed, the same perturbations
+        self.pushes = push_schedule(perturbations.pushes, duration, rng)
+        if perturbations.senses:
+            self.robot = PerturbedRobot(truth, perturbations, rng)
+        self._pelvis = truth.model.body(g1.ROOT_BODY).id
+
+    def advance_to(self, t: float) -> None:
+        sim = self.sim
+        for boundary in sorted(b for push in self.pushes for b in (push.start, push.end) if sim.time < b < t):
+            sim.step_until(boundary)
+            self._set_push_force()
+        self._set_push_force()
+        sim.step_until(t)
+
+    def _set_push_force(self) -> None:
+        now = self.sim.time
+        active = next((push for push in self.pushes if push.start <= now < push.end), None)
+        self.sim.data.xfrc_applied[self._pelvis, :3] = active.force if active is not None else (0.0, 0.0, 0.0)
+
+    def truth(self) -> RobotState:
+        return self.sim.read()
+
+    def close(self) -> None:
+        if self.robot is not self.sim:
+            self.robot.close()
+        super().close()
 
 
 class SimulatedHardwareBackend(HardwareBackend):

@@ -10,6 +10,7 @@ This module imports MuJoCo (through `sim`); hardware runs never import it.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from collections.abc import Callable
@@ -28,12 +29,13 @@ from controller.runtime.loop import RateLoop, RealtimeSimulationClock, Simulatio
 from controller.runtime.plots import plot_tracking
 from controller.runtime.run_config import SimRunConfig
 from controller.runtime.session import Session
-from controller.runtime.sim_backends import DirectSimBackend, SimulatedHardwareBackend
+from controller.runtime.sim_backends import DirectSimBackend, PerturbedSimBackend, SimulatedHardwareBackend
 from controller.runtime.status import StatusLine
 from controller.tracking.registry import TrackerSpec, make_tracker
 from hw.dds.config import DdsHardwareConfig
 from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_robot_config
+from sim.perturbations import apply_to_model
 from sim.robot import SimRobot
 from sim.world import build_model
 
@@ -132,7 +134,7 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
     tracker = make_tracker(tracker_name, TrackerSpec(cfg.policy, assets, robot.joint_names))
     if tracker.needs_plan and not cfg.planner:
         raise ConfigError(f"the {tracker.name} tracker follows planned whole-body motion: add --planner")
-    backend = _backend(cfg, robot)
+    backend = _backend(cfg, robot, duration)
     stack.callback(backend.close)
     source = stack.enter_context(open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed, cfg.hardware))
     wall_paced = backend.paced_on_wall_clock  # a robot in another process: its time is the wall's
@@ -180,8 +182,13 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
     return _BuiltRun(robot, session, RateLoop(clock, tracker.rate_hz), recorder, viewer, bar, ghost, status, hooks)
 
 
-def _backend(cfg: SimRunConfig, robot: SimRobot) -> Backend:
+def _backend(cfg: SimRunConfig, robot: SimRobot, duration: float | None) -> Backend:
     """MuJoCo directly, simulated buses with MuJoCo behind them, or the simulated G1 in its own process over DDS."""
+    if cfg.perturbations is not None:
+        if cfg.hardware is not None:
+            raise ConfigError("--perturb runs on the simulator directly for now; drop --hardware")
+        apply_to_model(robot.model, cfg.perturbations)
+        return PerturbedSimBackend(robot, cfg.perturbations, duration or 0.0, cfg.seed)
     if cfg.hardware is None:
         return DirectSimBackend(robot)
     hardware = load_robot_config(cfg.hardware)
@@ -244,6 +251,11 @@ def _report(cfg: SimRunConfig, run: _BuiltRun, outcome: _Outcome) -> dict[str, A
     report["overruns"] = run.loop.overruns
     report["final_base_position"] = [round(float(v), 4) for v in run.robot.read().base_pos]
     report["interrupted"] = outcome.interrupted
+    backend = run.session.backend
+    if cfg.perturbations is not None and isinstance(backend, PerturbedSimBackend):
+        report["perturbations"] = dataclasses.asdict(cfg.perturbations)
+        report["pushes"] = [{"start": push.start, "force_n": [round(f, 3) for f in push.force]} for push in backend.pushes]
+        report["push_impulse_ns"] = cfg.perturbations.pushes.impulse_ns if cfg.perturbations.pushes is not None else 0.0
     if outcome.error is not None:
         report["error"] = f"{type(outcome.error).__name__}: {outcome.error}"
     return report

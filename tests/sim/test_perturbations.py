@@ -1,0 +1,79 @@
+"""Perturbations: seeded, applied where they belong, and they move the run the way they should."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from controller.runtime.run_config import SimRunConfig
+from controller.runtime.sim_run import run
+from hw import g1
+from hw.errors import ConfigError
+from hw.types import JointCommand
+from sim.perturbations import Perturbations, PerturbedRobot, Pushes, apply_to_model, load_perturbations, push_schedule
+from sim.robot import SimRobot
+from sim.world import build_model
+
+
+def test_pushes_are_scheduled_from_the_seed() -> None:
+    pushes = Pushes(force_n=100.0, duration_s=0.2, interval_s=3.0, start_s=1.0)
+    first = push_schedule(pushes, 10.0, np.random.default_rng(4))
+    assert [p.start for p in first] == [1.0, 4.0, 7.0] and all(p.end == pytest.approx(p.start + 0.2) for p in first)
+    assert first == push_schedule(pushes, 10.0, np.random.default_rng(4)) != push_schedule(pushes, 10.0, np.random.default_rng(5))
+    assert all(np.hypot(p.force[0], p.force[1]) == pytest.approx(100.0) for p in first) and pushes.impulse_ns == pytest.approx(20.0)
+    fixed = push_schedule(Pushes(force_n=50.0, direction_deg=90.0), 7.0, np.random.default_rng(0))
+    assert fixed[0].force == pytest.approx((0.0, 50.0, 0.0), abs=1e-9)
+
+
+def test_friction_payload_and_motor_strength_change_the_model(assets: object) -> None:
+    model = build_model(assets.g1_mjcf)  # type: ignore[attr-defined]
+    friction, mass = model.geom_friction[model.geom("floor").id, 0], model.body_mass[model.body(g1.TORSO_BODY).id]
+    limits = model.actuator_forcerange.copy()
+    apply_to_model(model, Perturbations(friction_scale=0.5, payload_kg=4.0, torque_scale=0.8))
+    assert model.geom_friction[model.geom("floor").id, 0] == pytest.approx(0.5 * friction)
+    assert model.body_mass[model.body(g1.TORSO_BODY).id] == pytest.approx(mass + 4.0)
+    assert np.allclose(model.actuator_forcerange, 0.8 * limits)
+
+
+def test_latency_gains_noise_and_drops_sit_between_robot_and_controller(assets: object) -> None:
+    sim = SimRobot(build_model(assets.g1_mjcf))  # type: ignore[attr-defined]
+    p = Perturbations(latency_ticks=1, gain_scale=0.5, joint_noise_rad=0.01, drop_rate=0.5)
+    robot = PerturbedRobot(sim, p, np.random.default_rng(0))
+    n = g1.NUM_JOINTS
+    first = JointCommand(q=np.full(n, 0.1), dq=np.zeros(n), kp=np.full(n, 40.0), kd=np.full(n, 2.0), tau_ff=np.zeros(n))
+    second = JointCommand(q=np.full(n, 0.2), dq=np.zeros(n), kp=np.full(n, 40.0), kd=np.full(n, 2.0), tau_ff=np.zeros(n))
+    before = sim.data.ctrl.copy()
+    robot.write(first)
+    assert np.array_equal(sim.data.ctrl, before)  # one tick late: nothing yet
+    robot.write(second)
+    assert np.allclose(sim.data.ctrl, 20.0 * 0.1)  # the first command arrives, its gains halved (kp q* = 20 * 0.1)
+    readings = [robot.read() for _ in range(40)]
+    repeated = sum(a is b for a, b in zip(readings, readings[1:], strict=False))
+    assert 8 <= repeated <= 32  # about half the readings are the previous one again
+    truth = sim.read().joint_pos
+    assert 0.002 < float(np.std(readings[-1].joint_pos - truth)) < 0.03
+    robot.close()
+    sim.close()
+
+
+@pytest.mark.slow  # three short runs of the simulator
+def test_a_hard_push_topples_the_robot_and_the_same_seed_gives_the_same_run(tmp_path: Path) -> None:
+    hard = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.5))
+    gentle = Perturbations(pushes=Pushes(force_n=60.0, duration_s=0.1, interval_s=2.0, start_s=1.5))
+    falls = run(SimRunConfig(duration=4.0, perturbations=hard))
+    calm = run(SimRunConfig(duration=4.0, perturbations=gentle, seed=3))
+    again = run(SimRunConfig(duration=4.0, perturbations=gentle, seed=3))
+    assert falls["falls"] >= 1 and calm["falls"] == 0
+    assert calm["pushes"] == again["pushes"] and calm["final_base_position"] == again["final_base_position"]
+    assert calm["push_impulse_ns"] == pytest.approx(6.0) and calm["perturbations"]["pushes"]["force_n"] == 60.0
+
+
+def test_shipped_sets_load_and_mistakes_are_one_line(tmp_path: Path) -> None:
+    assert load_perturbations("push").pushes == Pushes(force_n=150.0, duration_s=0.1, interval_s=4.0, start_s=2.0)
+    assert load_perturbations("rough").senses
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("drop_rate: 1.5\n")
+    with pytest.raises(ConfigError, match="drop_rate"):
+        load_perturbations(str(bad))
