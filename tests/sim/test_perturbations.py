@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +51,7 @@ def test_latency_gains_noise_and_drops_sit_between_robot_and_controller(assets: 
     robot.write(second)
     assert np.allclose(sim.data.ctrl, 20.0 * 0.1)  # the first command arrives, its gains halved (kp q* = 20 * 0.1)
     readings = [robot.read() for _ in range(40)]
-    repeated = sum(a is b for a, b in zip(readings, readings[1:], strict=False))
+    repeated = sum(a is b for a, b in itertools.pairwise(readings))
     assert 8 <= repeated <= 32  # about half the readings are the previous one again
     truth = sim.read().joint_pos
     assert 0.002 < float(np.std(readings[-1].joint_pos - truth)) < 0.03
