@@ -11,13 +11,13 @@ install: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,g1]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,g1,eval]'
 	$(BIN)/g1ctl assets fetch
 	touch $(STAMP)
 
 # Training extra: torch==2.13.0 (a CPU wheel on the team's machines; elsewhere pip may fetch a large build).
 install-train: install
-	$(BIN)/python -c 'import torch' 2>/dev/null || $(BIN)/python -m pip install --quiet -e '.[dev,g1,train]'
+	$(BIN)/python -c 'import torch' 2>/dev/null || $(BIN)/python -m pip install --quiet -e '.[dev,g1,eval,train]'
 
 demo: install
 	$(BIN)/g1ctl sim --scenario walk_turn_stop --video runs/demo.mp4 --report runs/demo.json --progress

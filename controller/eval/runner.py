@@ -1,0 +1,170 @@
+"""Run a suite's episodes, in this process or as Ray tasks, into one report; an interrupted sweep resumes.
+
+Each episode is one `g1ctl sim` run (`sim_run.run`) from its own seed, so its result does not
+depend on where or in what order it ran. Results are appended to a journal (`REPORT.jsonl`) as
+they finish; a second run of the same suite and report skips the episodes already there. With
+Ray, a task whose worker dies is retried once, then reported as failed, never dropped.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from controller.eval.stats import summarize
+from controller.eval.suite import Episode, SuiteConfig, episodes
+from controller.reports import write_report
+from hw.errors import ConfigError
+from sim.perturbations import Perturbations
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    suite: SuiteConfig
+    suite_name: str
+    workers: int = 1  # 1 without an address: in this process, no Ray
+    address: str | None = None  # an existing Ray cluster ("auto", "ray://host:10001", ...)
+    report: Path | None = None
+    progress: bool = False
+    assets_dir: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.workers < 1:
+            raise ConfigError(f"--workers must be at least 1, got {self.workers}")
+
+
+def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, Any]:
+    """One episode on the simulator; any exception is the episode's failure, reported, not raised."""
+    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
+    from controller.runtime.sim_run import run  # noqa: PLC0415 - MuJoCo, in the worker
+
+    base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
+    perturbed = episode.perturbations if episode.perturbations != Perturbations() else None
+    cfg = SimRunConfig(
+        scenario=episode.scenario, policy=episode.policy, planner=episode.planner, duration=episode.duration_s, seed=episode.seed,
+        hardware=None if episode.hardware == "none" else episode.hardware, perturbations=perturbed, assets_dir=assets_dir,
+    )  # fmt: skip
+    t0 = time.perf_counter()
+    try:
+        report = run(cfg)
+    except Exception as exc:  # the episode failed; the sweep goes on and says so
+        return base | {"status": "failed", "error": f"{type(exc).__name__}: {exc}", "trace": traceback.format_exc(limit=3)}
+    return base | {
+        "status": "done",
+        "falls": report["falls"],
+        "velocity_error_mean": report["velocity_error_mean"],
+        "final_mode": report["final_mode"],
+        "damp_reason": report["damp_reason"],
+        "push_impulse_ns": report.get("push_impulse_ns", 0.0),
+        "pushes": len(report.get("pushes", [])),
+        "episode_seconds": round(time.perf_counter() - t0, 3),
+    }
+
+
+def run_suite(cfg: EvalConfig) -> dict[str, Any]:
+    """Every episode not yet in the journal, then the report over all of them."""
+    every = episodes(cfg.suite, cfg.suite_name)
+    journal = cfg.report.with_suffix(".jsonl") if cfg.report is not None else None
+    finished = _read_journal(journal) if journal is not None else {}
+    todo = [e for e in every if e.id not in finished]
+    t0 = time.perf_counter()
+    with tqdm(total=len(every), initial=len(every) - len(todo), unit="episode", disable=not cfg.progress, file=sys.stderr) as bar:
+
+        def record(result: dict[str, Any]) -> None:
+            finished[result["id"]] = result
+            if journal is not None:
+                journal.parent.mkdir(parents=True, exist_ok=True)
+                with journal.open("a") as out:
+                    out.write(json.dumps(result) + "\n")
+            bar.update(1)
+
+        if cfg.workers == 1 and cfg.address is None:
+            for episode in todo:
+                record(run_episode(episode, cfg.assets_dir))
+        else:
+            _run_on_ray(todo, cfg, record)
+    results = [finished[e.id] for e in every]
+    conditions = summarize(results)
+    report: dict[str, Any] = {
+        "suite": cfg.suite_name,
+        "description": cfg.suite.description,
+        "workers": cfg.workers,
+        "address": cfg.address,
+        "wall_seconds": round(time.perf_counter() - t0, 3),
+        "episodes_run": len(todo),
+        "conditions": conditions,
+        "episodes": results,
+    }
+    report["criteria_failures"] = criteria_failures(cfg.suite, conditions)
+    if cfg.report is not None:
+        write_report(report, cfg.report)
+    return report
+
+
+def criteria_failures(suite: SuiteConfig, conditions: dict[str, dict[str, Any]]) -> list[str]:
+    """One line per condition that misses its criteria."""
+    failures = []
+    for group, figures in conditions.items():
+        criteria = suite.criteria.get(figures["condition"])
+        if criteria is None:
+            continue
+        if figures["failed_episodes"]:
+            failures.append(f"{group}: {figures['failed_episodes']} episodes failed to run")
+        if figures["survival"] is not None and figures["survival"] < criteria.min_survival:
+            failures.append(f"{group}: survival {figures['survival']:.2f} < {criteria.min_survival:.2f}")
+        error = figures["velocity_error_mean"]
+        if criteria.max_velocity_error is not None and error is not None and error > criteria.max_velocity_error:
+            failures.append(f"{group}: velocity error {error:.3f} m/s > {criteria.max_velocity_error:.3f}")
+    return failures
+
+
+def _read_journal(path: Path) -> dict[str, dict[str, Any]]:
+    """Finished episodes of an earlier, interrupted run (a torn last line is ignored: that episode runs again)."""
+    if not path.is_file():
+        return {}
+    finished = {}
+    for line in path.read_text().splitlines():
+        try:
+            result = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if result.get("status") == "done":
+            finished[result["id"]] = result
+    return finished
+
+
+def _run_on_ray(todo: Iterable[Episode], cfg: EvalConfig, record: Callable[[dict[str, Any]], None]) -> None:
+    """Each episode a Ray task (one CPU, retried once when its worker dies); results recorded as they finish."""
+    try:
+        import ray  # noqa: PLC0415 - the eval extra
+    except ImportError as exc:
+        raise ConfigError("--workers > 1 and --address need Ray: pip install -e '.[eval]' (or run with --workers 1)") from exc
+    started = not ray.is_initialized()
+    if started:
+        if cfg.address is not None:
+            ray.init(address=cfg.address, log_to_driver=False)
+        else:
+            ray.init(num_cpus=cfg.workers, include_dashboard=False, log_to_driver=False)
+    try:
+        task = ray.remote(num_cpus=1, max_retries=1)(run_episode)
+        pending = {task.remote(e, cfg.assets_dir): e for e in todo}
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                episode = pending.pop(ref)
+                try:
+                    record(ray.get(ref))
+                except ray.exceptions.RayError as exc:  # the worker died twice: the episode is lost, and says so
+                    base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
+                    record(base | {"status": "failed", "error": f"{type(exc).__name__}: {str(exc).splitlines()[0]}"})
+    finally:
+        if started:
+            ray.shutdown()

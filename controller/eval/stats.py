@@ -1,0 +1,53 @@
+"""The figures of a robustness report: survival with a confidence interval, per condition and over push impulse."""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from typing import Any
+
+Z95 = 1.959964  # two-sided 95 %
+
+
+def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion: sensible at 0 and n, unlike the normal approximation."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def summarize(results: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per condition (`group`): episodes, falls, survival and its 95 % interval, mean velocity error, failed episodes."""
+    groups: dict[str, list[dict[str, Any]]] = defaultdict(list)
+    for r in results:
+        groups[r["group"]].append(r)
+    summary = {}
+    for group, rs in sorted(groups.items()):
+        done = [r for r in rs if r["status"] == "done"]
+        survived = sum(r["falls"] == 0 for r in done)
+        low, high = wilson_interval(survived, len(done))
+        errors = [r["velocity_error_mean"] for r in done if r["velocity_error_mean"] == r["velocity_error_mean"]]
+        summary[group] = {
+            "condition": rs[0]["condition"],
+            "episodes": len(done),
+            "failed_episodes": len(rs) - len(done),
+            "falls": sum(r["falls"] for r in done),
+            "survival": round(survived / len(done), 4) if done else None,
+            "survival_ci95": [round(low, 4), round(high, 4)],
+            "velocity_error_mean": round(sum(errors) / len(errors), 4) if errors else None,
+            "push_impulse_ns": rs[0].get("push_impulse_ns", 0.0),
+        }
+    return summary
+
+
+def largest_impulse_survived(curve: list[tuple[float, float]], level: float = 0.9) -> float | None:
+    """The largest push impulse (N s) whose survival is at least `level`, every smaller one included; None if none."""
+    best = None
+    for impulse, survival in sorted(curve):
+        if survival < level:
+            break
+        best = impulse
+    return best

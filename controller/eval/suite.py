@@ -1,0 +1,99 @@
+"""An evaluation suite (YAML) and the episodes it crosses into.
+
+A suite names what varies: scenarios, policies, whether the planner is in the loop, hardware
+configs, perturbation conditions (a shipped set by name, or inline values) and seeds; pass
+criteria may hold per condition. Every combination is an `Episode` with a stable id, so a
+report lists each episode's seed and result and an interrupted sweep knows what is done.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from hw.errors import ConfigError
+from hw.shipped import config_dir
+from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset
+from sim.perturbations import Perturbations, load_perturbations
+
+
+@dataclass(frozen=True)
+class Criteria:
+    min_survival: float = 0.0  # share of episodes without a fall
+    max_velocity_error: float | None = None  # m/s, mean over the condition's episodes
+
+
+@dataclass(frozen=True)
+class SuiteConfig:
+    name: str
+    duration_s: float  # of every episode
+    scenarios: tuple[str, ...] = ("walk_turn_stop",)
+    policies: tuple[str, ...] = ("fastsac",)
+    planner: tuple[bool, ...] = (False,)
+    hardware: tuple[str, ...] = ("none",)  # "none": the simulator directly
+    perturbations: dict[str, Any] = field(default_factory=lambda: {"nominal": {}})  # label -> a set's name or its values
+    seeds: int = 3  # seeds 0..seeds-1 per combination
+    criteria: dict[str, Criteria] = field(default_factory=dict)  # condition label -> what it must meet
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if self.duration_s <= 0 or self.seeds < 1:
+            raise ConfigError("a suite needs duration_s > 0 and seeds >= 1")
+
+
+@dataclass(frozen=True)
+class Episode:
+    scenario: str
+    policy: str
+    planner: bool
+    hardware: str
+    condition: str  # the perturbation label
+    perturbations: Perturbations
+    seed: int
+    duration_s: float
+
+    @property
+    def group(self) -> str:
+        """Everything but the seed: the condition a survival rate is taken over."""
+        return f"{self.scenario}/{self.policy}/{'planner' if self.planner else 'direct'}/{self.hardware}/{self.condition}"
+
+    @property
+    def id(self) -> str:
+        return f"{self.group}/seed{self.seed}"
+
+
+def available_suites() -> list[str]:
+    return preset_names(config_dir("suites"))
+
+
+def load_suite(name_or_path: str) -> SuiteConfig:
+    path = resolve_preset(name_or_path, config_dir("suites"), "suite")
+    cfg = from_dict(SuiteConfig, load_yaml(path), str(path))
+    episodes(cfg, str(path))  # every condition resolves, every criterion names one
+    return cfg
+
+
+def _perturbations(label: str, value: Any, source: str) -> Perturbations:
+    if isinstance(value, str):
+        return load_perturbations(value)
+    return from_dict(Perturbations, value or {}, source, f"perturbations.{label}")
+
+
+def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
+    """Every combination, seeds innermost, in a fixed order."""
+    conditions = {label: _perturbations(label, value, source) for label, value in cfg.perturbations.items()}
+    unknown = [label for label in cfg.criteria if label not in conditions]
+    if unknown:
+        raise ConfigError(f"{source}: criteria for unknown conditions: {', '.join(unknown)} (conditions: {', '.join(conditions)})")
+    return [
+        Episode(scenario, policy, planner, hardware, label, conditions[label], seed, cfg.duration_s)
+        for scenario, policy, planner, hardware, label, seed in itertools.product(
+            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, range(cfg.seeds)
+        )
+    ]
+
+
+def suite_path(name_or_path: str) -> Path:
+    return resolve_preset(name_or_path, config_dir("suites"), "suite")
