@@ -22,6 +22,7 @@ pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not insta
 from controller.runtime.dds_backend import RobotProcess
 from hw.dds.config import DdsHardwareConfig
 from hw.dds.robot import DdsRobot
+from hw.emulation.g1_faults import KINDS
 from hw.jointmap import load_robot_config
 from hw.robot import Lifecycle
 
@@ -65,7 +66,7 @@ def _drive_until_error(robot: DdsRobot, seconds: float) -> float:
     ],
 )
 def test_a_fault_of_the_robot_ends_in_damping_with_its_cause(fault: str, cause: str, sim_dds_config: Callable[[int], Path]) -> None:
-    cfg = _config(sim_dds_config(hash(fault) % 97))
+    cfg = _config(sim_dds_config(10 + KINDS.index(fault)))  # a domain per drill
     process = RobotProcess(cfg, extra_args=("--gantry", "--fault", f"{fault}@{FAULT_AT_S}"), truth=False)
     try:
         with DdsRobot(cfg) as robot:
