@@ -1,6 +1,6 @@
 """`g1ctl dataset ...`: the planner's motion dataset.
 
-g1ctl dataset record --out DIR --minutes M --seed S [--policy fastsac] [--progress]
+g1ctl dataset record --out DIR --minutes M --seed S [--policy fastsac] [--progress] [--workers N] [--address ADDR]
 g1ctl dataset import --csv PATH [--fps 60] --out DIR      (a .csv file or a folder of them, recursively)
 g1ctl dataset info DIR
 
@@ -24,6 +24,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     record.add_argument("--seed", type=int, default=0, help="run seed; episode seeds and splits follow from it")
     record.add_argument("--policy", default="fastsac", help="policy preset name or path to a policy YAML")
     record.add_argument("--progress", action="store_true", help="show a progress bar on stderr")
+    record.add_argument("--workers", type=int, default=1, help="episodes at a time, as Ray tasks (1: in this process)")
+    record.add_argument("--address", default=None, help="record on this Ray cluster (e.g. auto, or HOST:6379)")
 
     imp = dataset_sub.add_parser("import", help="import G1 clips from 36-column CSV files")
     imp.add_argument("--csv", required=True, help="a .csv file or a folder searched recursively")
@@ -45,8 +47,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.dataset_command == "record":
         cfg = dataset_record.RecordConfig(
-            out=args.out, minutes=args.minutes, seed=args.seed, policy=args.policy, progress=args.progress, assets_dir=args.assets_dir
-        )
+            out=args.out, minutes=args.minutes, seed=args.seed, policy=args.policy, progress=args.progress, assets_dir=args.assets_dir,
+            workers=args.workers, address=args.address,
+        )  # fmt: skip
         print(json.dumps(dataset_record.record(cfg)))
         return 0
     if args.dataset_command == "import":

@@ -12,17 +12,16 @@ import json
 import sys
 import time
 import traceback
-from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
+from controller.eval.executor import Executor, TaskLost
 from controller.eval.stats import summarize
 from controller.eval.suite import Episode, SuiteConfig, episodes
 from controller.reports import write_report
-from hw.errors import ConfigError
 from sim.perturbations import Perturbations
 
 
@@ -35,10 +34,6 @@ class EvalConfig:
     report: Path | None = None
     progress: bool = False
     assets_dir: str | None = None
-
-    def __post_init__(self) -> None:
-        if self.workers < 1:
-            raise ConfigError(f"--workers must be at least 1, got {self.workers}")
 
 
 def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, Any]:
@@ -86,11 +81,13 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
                     out.write(json.dumps(result) + "\n")
             bar.update(1)
 
-        if cfg.workers == 1 and cfg.address is None:
-            for episode in todo:
-                record(run_episode(episode, cfg.assets_dir))
-        else:
-            _run_on_ray(todo, cfg, record)
+        with Executor(cfg.workers, cfg.address) as executor:
+            for index, result in executor.map_unordered(run_episode, [(e, cfg.assets_dir) for e in todo]):
+                if isinstance(result, TaskLost):  # the worker died twice: the episode is lost, and says so
+                    episode = todo[index]
+                    base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
+                    result = base | {"status": "failed", "error": str(result)}
+                record(result)
     results = [finished[e.id] for e in every]
     conditions = summarize(results)
     report: dict[str, Any] = {
@@ -139,32 +136,3 @@ def _read_journal(path: Path) -> dict[str, dict[str, Any]]:
         if result.get("status") == "done":
             finished[result["id"]] = result
     return finished
-
-
-def _run_on_ray(todo: Iterable[Episode], cfg: EvalConfig, record: Callable[[dict[str, Any]], None]) -> None:
-    """Each episode a Ray task (one CPU, retried once when its worker dies); results recorded as they finish."""
-    try:
-        import ray  # noqa: PLC0415 - the eval extra
-    except ImportError as exc:
-        raise ConfigError("--workers > 1 and --address need Ray: pip install -e '.[eval]' (or run with --workers 1)") from exc
-    started = not ray.is_initialized()
-    if started:
-        if cfg.address is not None:
-            ray.init(address=cfg.address, log_to_driver=False)
-        else:
-            ray.init(num_cpus=cfg.workers, include_dashboard=False, log_to_driver=False)
-    try:
-        task = ray.remote(num_cpus=1, max_retries=1)(run_episode)
-        pending = {task.remote(e, cfg.assets_dir): e for e in todo}
-        while pending:
-            ready, _ = ray.wait(list(pending), num_returns=1)
-            for ref in ready:
-                episode = pending.pop(ref)
-                try:
-                    record(ray.get(ref))
-                except ray.exceptions.RayError as exc:  # the worker died twice: the episode is lost, and says so
-                    base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
-                    record(base | {"status": "failed", "error": f"{type(exc).__name__}: {str(exc).splitlines()[0]}"})
-    finally:
-        if started:
-            ray.shutdown()

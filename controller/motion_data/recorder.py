@@ -15,6 +15,7 @@ Imports MuJoCo (through `sim`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import sys
 import time
@@ -27,6 +28,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
+from controller.eval.executor import Executor, TaskLost
 from controller.inputs.base import VelocityCommand
 from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
 from controller.motion_data.dataset import FPS, MotionClip, episode_seed, minutes_per_split, save_dataset, split_for_seed
@@ -58,6 +60,8 @@ class RecordConfig:
     progress: bool = False
     assets_dir: str | None = None
     episode_seconds: tuple[float, float] = EPISODE_SECONDS
+    workers: int = 1  # episodes at a time; more than 1 (or an address) runs them as Ray tasks
+    address: str | None = None  # an existing Ray cluster
 
 
 @dataclass
@@ -83,7 +87,7 @@ class Recorder:
         self.limits = self.policy.command_limits
         self.dt = 1.0 / self.policy.cfg.rate_hz
 
-    def episode(self, seed: int, seconds: float, on_tick: Any = None) -> Episode:
+    def episode(self, seed: int, seconds: float) -> Episode:
         """One episode of `seconds` recorded seconds with its own seed; stops early at a fall."""
         rng = np.random.default_rng(seed)
         robot, policy, sampler = self.robot, self.policy, self.sampler
@@ -110,7 +114,7 @@ class Recorder:
 
         commands = np.zeros((frames, 3))
         labels = np.zeros(frames, dtype=np.int16)
-        fell = self._run(t0 + (frames - 0.5) / FPS, at, on_tick, labels=(commands, labels))
+        fell = self._run(t0 + (frames - 0.5) / FPS, at, labels=(commands, labels))
         keep = sampler.frames
         if fell:
             keep = max(0, round((robot.time - t0 - DROP_BEFORE_FALL_S) * FPS))
@@ -149,7 +153,7 @@ class Recorder:
         vel[idx] *= 1.0 - w
         return dataclasses.replace(state, joint_pos=pos, joint_vel=vel)
 
-    def _run(self, until: float, at: Any, on_tick: Any = None, labels: tuple[FloatArray, NDArray[np.int16]] | None = None) -> bool:
+    def _run(self, until: float, at: Any, labels: tuple[FloatArray, NDArray[np.int16]] | None = None) -> bool:
         """Policy ticks until time `until` (frames sampled on the way); True when the robot fell."""
         robot, policy, sampler, dt = self.robot, self.policy, self.sampler, self.dt
         while robot.time < until - 1e-9:
@@ -169,57 +173,53 @@ class Recorder:
                 stop = min(sampler.frames, len(gestures))
                 commands[before:stop] = (velocity.vx, velocity.vy, velocity.yaw_rate)
                 gestures[before:stop] = gesture
-            if on_tick is not None:
-                on_tick(dt)
             if robot.has_fallen():
                 return True
         return False
 
 
 def record(cfg: RecordConfig) -> dict[str, Any]:
-    """Record `cfg.minutes` of motion into a dataset at `cfg.out`; returns a summary."""
+    """Record `cfg.minutes` of motion into a dataset at `cfg.out`; returns a summary.
+
+    Episodes run `cfg.workers` at a time (Ray; in this process with one worker). Each episode's
+    seed and length are what one worker alone would choose: a wave of episodes is planned
+    ahead, and an episode whose length an earlier one's fall changed is dropped and planned
+    again, so the clips are the same whatever the number of workers.
+    """
     if not (cfg.minutes > 0 and math.isfinite(cfg.minutes)):
         raise ConfigError(f"--minutes must be positive, got {cfg.minutes}")
     if cfg.seed < 0:
         raise ConfigError(f"--seed must be 0 or more, got {cfg.seed}")
     if cfg.out.exists() and not cfg.out.is_dir():
         raise ConfigError(f"{cfg.out}: exists and is not a folder")
-    lo, hi = cfg.episode_seconds
-    recorder = Recorder(cfg.policy, cfg.assets_dir)
     target = cfg.minutes * 60.0
     clips: list[MotionClip] = []
-    falls = 0
-    kept = 0.0
-    sim_seconds = 0.0
+    falls = index = 0
+    kept = sim_seconds = 0.0
     wall_start = time.perf_counter()
-    with tqdm(total=round(target), unit="s", disable=not cfg.progress, desc="record", file=sys.stderr) as bar:
-        pending = [0.0]
-
-        def on_tick(dt: float) -> None:
-            pending[0] += dt
-            if pending[0] >= 1.0:
-                bar.update(1)
-                pending[0] -= 1.0
-
-        index = 0
+    with (
+        Executor(cfg.workers, cfg.address) as executor,
+        tqdm(total=round(target), unit="s", disable=not cfg.progress, desc="record", file=sys.stderr) as bar,
+    ):
         while target - kept > 0.5 / FPS:
             if index >= 1000:
                 raise ConfigError("more than 1000 episodes in one run; record in several runs with different seeds")
-            seed = episode_seed(cfg.seed, index)
-            rng = np.random.default_rng([seed, 1])
-            length = float(rng.uniform(lo, hi))
-            remaining = target - kept
-            if remaining <= hi:
-                length = remaining  # the last episode
-            elif remaining - length < lo:
-                length = remaining / 2  # no short last episode: two halves within [lo, hi] (when hi >= 2 lo)
-            episode = recorder.episode(seed, length, on_tick)
-            index += 1
-            sim_seconds += episode.sim_seconds
-            falls += episode.fell
-            if episode.clip is not None:
-                clips.append(episode.clip)
-                kept += episode.clip.seconds
+            wave = _plan(cfg, index, kept, target, count=1 if executor.in_process else 2 * cfg.workers)
+            results: dict[int, Episode] = {}
+            for i, episode in executor.map_unordered(_record_episode, [(cfg.policy, cfg.assets_dir, seed, n) for seed, n in wave]):
+                if isinstance(episode, TaskLost):
+                    raise ConfigError(f"recording episode {index + i} was lost twice ({episode}); run again")
+                results[i] = episode
+            for i, planned in enumerate(wave):
+                if planned != _episode_plan(cfg, index, kept, target):
+                    break  # an earlier fall changed what comes next: plan again from here
+                episode = results[i]
+                index += 1
+                sim_seconds += episode.sim_seconds
+                falls += episode.fell
+                if episode.clip is not None:
+                    clips.append(episode.clip)
+                    kept += episode.clip.seconds
             bar.n = min(round(kept), round(target))
             bar.refresh()
     wall = time.perf_counter() - wall_start
@@ -230,8 +230,42 @@ def record(cfg: RecordConfig) -> dict[str, Any]:
         "clips": len(clips),
         "episodes": index,
         "falls": falls,
+        "workers": cfg.workers,
         "minutes": minutes_per_split(clips),
         "sim_seconds": round(sim_seconds, 2),
         "wall_seconds": round(wall, 2),
         "sim_seconds_per_wall_second": round(sim_seconds / wall, 2) if wall > 0 else None,
     }
+
+
+def _episode_plan(cfg: RecordConfig, index: int, kept: float, target: float) -> tuple[int, float]:
+    """The seed and length of episode `index` once `kept` seconds are kept (what a sequential recording does)."""
+    lo, hi = cfg.episode_seconds
+    seed = episode_seed(cfg.seed, index)
+    length = float(np.random.default_rng([seed, 1]).uniform(lo, hi))
+    remaining = target - kept
+    if remaining <= hi:
+        length = remaining  # the last episode
+    elif remaining - length < lo:
+        length = remaining / 2  # no short last episode: two halves within [lo, hi] (when hi >= 2 lo)
+    return seed, length
+
+
+def _plan(cfg: RecordConfig, index: int, kept: float, target: float, count: int) -> list[tuple[int, float]]:
+    """Up to `count` episodes ahead, assuming none falls (each keeps its whole length)."""
+    wave: list[tuple[int, float]] = []
+    while len(wave) < count and target - kept > 0.5 / FPS and index + len(wave) < 1000:
+        seed, length = _episode_plan(cfg, index + len(wave), kept, target)
+        wave.append((seed, length))
+        kept += length
+    return wave
+
+
+@functools.cache
+def _recorder(policy: str, assets_dir: str | None) -> Recorder:
+    """One recorder per process (and per Ray worker): the policy and the model load once."""
+    return Recorder(policy, assets_dir)
+
+
+def _record_episode(policy: str, assets_dir: str | None, seed: int, length: float) -> Episode:
+    return _recorder(policy, assets_dir).episode(seed, length)

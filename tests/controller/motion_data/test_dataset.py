@@ -396,3 +396,18 @@ def test_cli_mistakes_are_one_line(tmp_path: Path) -> None:
     assert line.startswith("g1ctl: ") and "3 columns, expected 36" in line
     line = one_line_error(g1ctl("dataset", "record", "--out", str(tmp_path / "r"), "--minutes", "0"))
     assert line.startswith("g1ctl: ") and "--minutes must be positive" in line
+
+
+@pytest.mark.slow  # a local Ray instance
+def test_recording_on_two_ray_workers_writes_the_same_clips(tmp_path: Path) -> None:
+    pytest.importorskip("ray", reason="the eval extra (ray) is not installed")
+    from controller.motion_data.recorder import RecordConfig, record
+
+    common = {"minutes": 0.25, "seed": 6, "episode_seconds": (3.0, 5.0)}
+    alone = record(RecordConfig(out=tmp_path / "one", **common))  # type: ignore[arg-type]
+    together = record(RecordConfig(out=tmp_path / "two", workers=2, **common))  # type: ignore[arg-type]
+    assert (alone["episodes"], alone["clips"]) == (together["episodes"], together["clips"]) and together["workers"] == 2
+    one, two = load_dataset(tmp_path / "one"), load_dataset(tmp_path / "two")
+    assert [c.name for c in one] == [c.name for c in two] and len(one) >= 3
+    for a, b in zip(one, two, strict=True):
+        assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.contacts, b.contacts) and a.captions == b.captions
