@@ -19,7 +19,8 @@ from typing import Any
 from tqdm import tqdm
 
 from controller.eval.executor import Executor, TaskLost
-from controller.eval.stats import summarize
+from controller.eval.html import write_html
+from controller.eval.stats import push_curves, summarize
 from controller.eval.suite import Episode, SuiteConfig, episodes
 from controller.reports import write_report
 from sim.perturbations import Perturbations
@@ -98,11 +99,13 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
         "wall_seconds": round(time.perf_counter() - t0, 3),
         "episodes_run": len(todo),
         "conditions": conditions,
+        "push_curves": push_curves(conditions),
         "episodes": results,
     }
     report["criteria_failures"] = criteria_failures(cfg.suite, conditions)
     if cfg.report is not None:
         write_report(report, cfg.report)
+        write_html(report, cfg.report.with_suffix(".html"))
     return report
 
 

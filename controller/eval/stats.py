@@ -51,3 +51,23 @@ def largest_impulse_survived(curve: list[tuple[float, float]], level: float = 0.
             break
         best = impulse
     return best
+
+
+def push_curves(conditions: dict[str, dict[str, Any]], level: float = 0.9) -> dict[str, dict[str, Any]]:
+    """Per setup (scenario, policy, planner, hardware: the condition's group without its label), survival over
+    push impulse from every pushed condition (and the unpushed ones at 0 N s), and the largest impulse survived at `level`."""
+    curves: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for group, figures in conditions.items():
+        if figures["survival"] is None:
+            continue
+        setup = group.rsplit("/", 1)[0]
+        curves[setup].append((float(figures["push_impulse_ns"]), float(figures["survival"])))
+    return {
+        setup: {
+            "impulse_ns": [i for i, _ in sorted(points)],
+            "survival": [s for _, s in sorted(points)],
+            f"impulse_survived_at_{round(100 * level)}_ns": largest_impulse_survived(points, level),
+        }
+        for setup, points in sorted(curves.items())
+        if any(impulse > 0 for impulse, _ in points)
+    }
