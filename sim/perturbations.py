@@ -49,7 +49,7 @@ class Pushes:
 @dataclass(frozen=True)
 class Perturbations:
     pushes: Pushes | None = None
-    friction_scale: float = 1.0  # the floor's sliding friction, scaled
+    friction_scale: float = 1.0  # sliding friction between the feet and the floor, scaled
     payload_kg: float = 0.0  # extra mass on the torso
     torque_scale: float = 1.0  # motor strength: every joint's effort limit, scaled
     gain_scale: float = 1.0  # motor strength: the PD gains the controller sends, scaled
@@ -80,8 +80,7 @@ class Perturbations:
 
 def apply_to_model(model: mujoco.MjModel, p: Perturbations) -> None:
     """Friction, payload and effort limits into a freshly compiled G1 scene."""
-    floor = model.geom("floor").id
-    model.geom_friction[floor, 0] *= p.friction_scale
+    model.geom_friction[:, 0] *= p.friction_scale  # every geom: MuJoCo takes the larger of a contact pair's frictions
     model.body_mass[model.body(g1.TORSO_BODY).id] += p.payload_kg
     model.actuator_forcerange[:] *= p.torque_scale
 

@@ -8,6 +8,7 @@ Ray, a task whose worker dies is retried once, then reported as failed, never dr
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import time
@@ -60,6 +61,7 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
         "final_mode": report["final_mode"],
         "damp_reason": report["damp_reason"],
         "push_impulse_ns": report.get("push_impulse_ns", 0.0),
+        "pushes_only": dataclasses.replace(episode.perturbations, pushes=None) == Perturbations(),  # on the push curve
         "pushes": len(report.get("pushes", [])),
         "episode_seconds": round(time.perf_counter() - t0, 3),
     }

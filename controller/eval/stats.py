@@ -39,6 +39,7 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "survival_ci95": [round(low, 4), round(high, 4)],
             "velocity_error_mean": round(sum(errors) / len(errors), 4) if errors else None,
             "push_impulse_ns": rs[0].get("push_impulse_ns", 0.0),
+            "pushes_only": all(r.get("pushes_only", False) for r in done),
         }
     return summary
 
@@ -55,11 +56,11 @@ def largest_impulse_survived(curve: list[tuple[float, float]], level: float = 0.
 
 def push_curves(conditions: dict[str, dict[str, Any]], level: float = 0.9) -> dict[str, dict[str, Any]]:
     """Per setup (scenario, policy, planner, hardware: the condition's group without its label), survival over
-    push impulse from every pushed condition (and the unpushed ones at 0 N s), and the largest impulse survived at `level`."""
+    push impulse from the conditions that only push (the nominal one at 0 N s), and the largest impulse survived at `level`."""
     curves: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for group, figures in conditions.items():
-        if figures["survival"] is None:
-            continue
+        if figures["survival"] is None or not figures.get("pushes_only"):
+            continue  # only the nominal and the pushed conditions lie on the curve
         setup = group.rsplit("/", 1)[0]
         curves[setup].append((float(figures["push_impulse_ns"]), float(figures["survival"])))
     return {

@@ -68,17 +68,17 @@ def test_ray_workers_give_the_same_results_as_this_process(tmp_path: Path) -> No
 def test_push_curves_and_the_html_page(tmp_path: Path) -> None:
     from controller.eval.stats import push_curves
 
-    def figures(condition: str, impulse: float, survival: float) -> dict[str, object]:
-        return {"condition": condition, "survival": survival, "push_impulse_ns": impulse, "survival_ci95": [0.0, 1.0]}
+    def figures(condition: str, impulse: float, survival: float, pushes_only: bool = True) -> dict[str, object]:
+        return {"condition": condition, "survival": survival, "push_impulse_ns": impulse, "pushes_only": pushes_only}
 
     conditions = {
         "walk/fastsac/direct/none/nominal": figures("nominal", 0.0, 1.0),
         "walk/fastsac/direct/none/push_10": figures("push_10", 10.0, 1.0),
         "walk/fastsac/direct/none/push_30": figures("push_30", 30.0, 0.5),
-        "walk/fastsac/direct/none/slippery": figures("slippery", 0.0, 1.0),
+        "walk/fastsac/direct/none/slippery": figures("slippery", 0.0, 0.5, pushes_only=False),  # not on the curve
     }
     curve = push_curves(conditions)["walk/fastsac/direct/none"]  # type: ignore[arg-type]
-    assert curve["impulse_ns"] == [0.0, 0.0, 10.0, 30.0] and curve["impulse_survived_at_90_ns"] == 10.0
+    assert curve["impulse_ns"] == [0.0, 10.0, 30.0] and curve["impulse_survived_at_90_ns"] == 10.0
     report = run_suite(EvalConfig(TINY, "tiny", report=tmp_path / "tiny.json"))
     page = (tmp_path / "tiny.html").read_text()
     assert page.startswith("<!doctype html>") and page.count("data:image/png;base64,") == 2  # survival, and the push curve
