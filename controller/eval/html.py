@@ -13,10 +13,8 @@ import io
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 STYLE = (
     "body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse}"
@@ -59,10 +57,16 @@ def write_html(report: dict[str, Any], path: Path) -> None:
     path.write_text(page)
 
 
-def _data_uri(fig: Any) -> str:
+def _figure(width: float, height: float) -> tuple[Figure, Any]:
+    """A figure and its axes on the Agg canvas (no pyplot: no global backend chosen, nothing left open)."""
+    fig = Figure(figsize=(width, height))
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots()
+
+
+def _data_uri(fig: Figure) -> str:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=90, bbox_inches="tight")
-    plt.close(fig)
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
 
 
@@ -71,7 +75,7 @@ def _survival_plot(conditions: dict[str, dict[str, Any]]) -> str:
     survival = [c["survival"] or 0.0 for c in conditions.values()]
     low = [s - c["survival_ci95"][0] for s, c in zip(survival, conditions.values(), strict=True)]
     high = [c["survival_ci95"][1] - s for s, c in zip(survival, conditions.values(), strict=True)]
-    fig, ax = plt.subplots(figsize=(9, max(2.0, 0.28 * len(names))))
+    fig, ax = _figure(9, max(2.0, 0.28 * len(names)))
     ax.barh(range(len(names)), survival, xerr=[low, high], color="tab:blue", ecolor="gray")
     ax.set_yticks(range(len(names)), names, fontsize=7)
     ax.set_xlim(0, 1.05)
@@ -81,7 +85,7 @@ def _survival_plot(conditions: dict[str, dict[str, Any]]) -> str:
 
 
 def _curve_plot(curves: dict[str, dict[str, Any]]) -> str:
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = _figure(7, 4)
     for setup, curve in curves.items():
         ax.plot(curve["impulse_ns"], curve["survival"], marker="o", label=setup)
     ax.axhline(0.9, color="gray", linestyle="--", linewidth=0.8)
