@@ -27,6 +27,7 @@ from hw.robot import RobotInterface
 from hw.shipped import config_dir
 from hw.types import JointCommand, RobotState
 from hw.yamlconfig import from_dict, load_yaml, resolve_preset
+from sim.robot import SimRobot
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,23 @@ def push_schedule(p: Pushes | None, duration_s: float, rng: np.random.Generator)
         pushes.append(Push(t, t + p.duration_s, (p.force_n * math.cos(heading), p.force_n * math.sin(heading), 0.0)))
         t += p.interval_s
     return tuple(pushes)
+
+
+class PushForces:
+    """A run's pushes on the simulated robot's pelvis: `apply()` sets the force in effect at the physics' time."""
+
+    def __init__(self, robot: SimRobot, pushes: tuple[Push, ...]) -> None:
+        self.robot, self.pushes = robot, pushes
+        self._pelvis = robot.model.body(g1.ROOT_BODY).id
+
+    def boundaries(self, start: float, end: float) -> list[float]:
+        """Times in (start, end) where a push begins or ends: the physics must stop there to switch the force."""
+        return sorted(b for push in self.pushes for b in (push.start, push.end) if start < b < end)
+
+    def apply(self) -> None:
+        now = self.robot.time
+        active = next((push for push in self.pushes if push.start <= now < push.end), None)
+        self.robot.data.xfrc_applied[self._pelvis, :3] = active.force if active is not None else (0.0, 0.0, 0.0)
 
 
 class PerturbedRobot(RobotInterface):

@@ -14,14 +14,13 @@ import numpy as np
 
 from controller.runtime.backend import Backend
 from controller.runtime.hardware_backend import HardwareBackend
-from hw import g1
 from hw.emulation.faults import load_faults
 from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import load_hardware_config
 from hw.types import RobotState
 from sim.hardware_twin import MuJoCoPlant
-from sim.perturbations import Perturbations, PerturbedRobot, push_schedule
+from sim.perturbations import Perturbations, PerturbedRobot, PushForces, push_schedule
 from sim.robot import SimRobot
 
 # The simulated robot starts in the default pose, so the soft start has nothing to ramp;
@@ -60,23 +59,16 @@ class PerturbedSimBackend(DirectSimBackend):
     def __init__(self, truth: SimRobot, perturbations: Perturbations, duration: float, seed: int) -> None:
         super().__init__(truth)
         rng = np.random.default_rng(seed)  # the run's one generator: the same seed, the same perturbations
-        self.pushes = push_schedule(perturbations.pushes, duration, rng)
+        self.pushes = PushForces(truth, push_schedule(perturbations.pushes, duration, rng))
         if perturbations.senses:
             self.robot = PerturbedRobot(truth, perturbations, rng)
-        self._pelvis = truth.model.body(g1.ROOT_BODY).id
 
     def advance_to(self, t: float) -> None:
-        sim = self.sim
-        for boundary in sorted(b for push in self.pushes for b in (push.start, push.end) if sim.time < b < t):
-            sim.step_until(boundary)
-            self._set_push_force()
-        self._set_push_force()
-        sim.step_until(t)
-
-    def _set_push_force(self) -> None:
-        now = self.sim.time
-        active = next((push for push in self.pushes if push.start <= now < push.end), None)
-        self.sim.data.xfrc_applied[self._pelvis, :3] = active.force if active is not None else (0.0, 0.0, 0.0)
+        for boundary in self.pushes.boundaries(self.sim.time, t):
+            self.sim.step_until(boundary)
+            self.pushes.apply()
+        self.pushes.apply()
+        self.sim.step_until(t)
 
     def truth(self) -> RobotState:
         return self.sim.read()
@@ -90,7 +82,11 @@ class PerturbedSimBackend(DirectSimBackend):
 class SimulatedHardwareBackend(HardwareBackend):
     """Hardware over virtual buses and pseudo-terminals, MuJoCo behind the emulators; the simulator is ground truth."""
 
-    def __init__(self, truth: SimRobot, hardware: str, faults: str | None = None) -> None:
+    def __init__(
+        self, truth: SimRobot, hardware: str, faults: str | None = None, perturbations: Perturbations | None = None,
+        duration: float = 0.0, seed: int = 0,
+    ) -> None:  # fmt: skip
+        """`perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them."""
         cfg = load_hardware_config(hardware)
         plans = load_faults(faults, list(cfg.buses)) if faults else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
@@ -104,6 +100,14 @@ class SimulatedHardwareBackend(HardwareBackend):
             self.twin.close()
             raise
         super().__init__(host, hardware, now=lambda: truth.time, after_cycle=self.twin.step)
+        rng = np.random.default_rng(seed)
+        self.pushes = PushForces(truth, push_schedule(perturbations.pushes if perturbations else None, duration, rng))
+        if perturbations is not None and perturbations.senses:
+            self.robot = PerturbedRobot(host, perturbations, rng)
+
+    def cycle(self) -> None:
+        self.pushes.apply()
+        super().cycle()
 
     def truth(self) -> RobotState:
         return self.sim.read()
@@ -116,6 +120,8 @@ class SimulatedHardwareBackend(HardwareBackend):
 
     def close(self) -> None:
         try:
+            if self.robot is not self.host:
+                self.robot.close()
             super().close()
         finally:
             self.twin.close()

@@ -184,14 +184,16 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
 
 def _backend(cfg: SimRunConfig, robot: SimRobot, duration: float | None) -> Backend:
     """MuJoCo directly, simulated buses with MuJoCo behind them, or the simulated G1 in its own process over DDS."""
+    hardware = load_robot_config(cfg.hardware) if cfg.hardware is not None else None
     if cfg.perturbations is not None:
-        if cfg.hardware is not None:
-            raise ConfigError("--perturb runs on the simulator directly for now; drop --hardware")
+        if isinstance(hardware, DdsHardwareConfig):
+            raise ConfigError("--perturb needs the physics in this process: the simulator, or simulated buses (sim-can, sim-mixed)")
         apply_to_model(robot.model, cfg.perturbations)
-        return PerturbedSimBackend(robot, cfg.perturbations, duration or 0.0, cfg.seed)
+        if cfg.hardware is None:
+            return PerturbedSimBackend(robot, cfg.perturbations, duration or 0.0, cfg.seed)
+        return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults, cfg.perturbations, duration or 0.0, cfg.seed)
     if cfg.hardware is None:
         return DirectSimBackend(robot)
-    hardware = load_robot_config(cfg.hardware)
     if isinstance(hardware, DdsHardwareConfig):
         from controller.runtime.dds_backend import SimulatedDdsBackend  # noqa: PLC0415 - the g1 extra
 
@@ -252,9 +254,9 @@ def _report(cfg: SimRunConfig, run: _BuiltRun, outcome: _Outcome) -> dict[str, A
     report["final_base_position"] = [round(float(v), 4) for v in run.robot.read().base_pos]
     report["interrupted"] = outcome.interrupted
     backend = run.session.backend
-    if cfg.perturbations is not None and isinstance(backend, PerturbedSimBackend):
+    if cfg.perturbations is not None and isinstance(backend, PerturbedSimBackend | SimulatedHardwareBackend):
         report["perturbations"] = dataclasses.asdict(cfg.perturbations)
-        report["pushes"] = [{"start": push.start, "force_n": [round(f, 3) for f in push.force]} for push in backend.pushes]
+        report["pushes"] = [{"start": push.start, "force_n": [round(f, 3) for f in push.force]} for push in backend.pushes.pushes]
         report["push_impulse_ns"] = cfg.perturbations.pushes.impulse_ns if cfg.perturbations.pushes is not None else 0.0
     if outcome.error is not None:
         report["error"] = f"{type(outcome.error).__name__}: {outcome.error}"

@@ -78,3 +78,11 @@ def test_shipped_sets_load_and_mistakes_are_one_line(tmp_path: Path) -> None:
     bad.write_text("drop_rate: 1.5\n")
     with pytest.raises(ConfigError, match="drop_rate"):
         load_perturbations(str(bad))
+
+
+@pytest.mark.slow  # a run through the simulated CAN buses
+def test_perturbations_reach_a_run_through_simulated_hardware() -> None:
+    shove = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.0), latency_ticks=1, joint_noise_rad=0.005)
+    report = run(SimRunConfig(duration=3.0, hardware="sim-can", perturbations=shove))
+    assert report["falls"] == 1 and report["pushes"][0]["start"] == 1.0  # on hardware a fall ends the run
+    assert report["hw"]["faults"] == 0 and report["perturbations"]["latency_ticks"] == 1
