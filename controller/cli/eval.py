@@ -1,4 +1,4 @@
-"""`g1ctl eval --suite smoke|PATH [--workers N] [--address ADDR] [--report PATH] [--progress]`: a robustness sweep.
+"""`g1ctl eval --suite smoke|PATH [--workers N] [--address ADDR] [--report PATH] [--progress] [--first-seed N]`: a sweep.
 
 Every episode of the suite (`controller/eval/suite.py`) runs on the simulator, in this process
 (`--workers 1`) or as Ray tasks (a local instance with N CPUs that starts and stops with the
@@ -10,6 +10,7 @@ interval and the velocity error; the exit status is 1 when a condition misses th
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -22,6 +23,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     ev.add_argument("--address", default=None, help="join this Ray cluster (e.g. auto, or HOST:6379) instead of starting one")
     ev.add_argument("--report", type=Path, default=None, help="JSON report; its journal REPORT.jsonl lets a sweep resume")
     ev.add_argument("--progress", action="store_true", help="a progress bar on stderr")
+    ev.add_argument("--against", type=Path, default=None, help="an earlier report (other seeds): name the conditions that do not hold")
+    ev.add_argument("--first-seed", type=int, default=None, help="run the suite's episodes from this seed on (a re-run with other seeds)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -29,6 +32,8 @@ def run(args: argparse.Namespace) -> int:
     from controller.eval.suite import load_suite  # noqa: PLC0415
 
     suite = load_suite(args.suite)
+    if args.first_seed is not None:
+        suite = dataclasses.replace(suite, first_seed=args.first_seed)
     report = run_suite(EvalConfig(suite, args.suite, args.workers, args.address, args.report, args.progress, args.assets_dir))
     for group, figures in report["conditions"].items():
         keys = ("episodes", "falls", "survival", "survival_ci95", "velocity_error_mean")
@@ -36,6 +41,13 @@ def run(args: argparse.Namespace) -> int:
     print(json.dumps({"wall_seconds": report["wall_seconds"], "episodes_run": report["episodes_run"], "workers": report["workers"]}))
     if args.report:
         print(f"report: {args.report}")
+    if args.against is not None:
+        from controller.eval.stats import disagreements  # noqa: PLC0415
+
+        earlier = json.loads(args.against.read_text())["conditions"]
+        differ = disagreements(earlier, report["conditions"])
+        print(json.dumps({"against": str(args.against), "conditions_compared": len(set(earlier) & set(report["conditions"])),
+                          "outside_the_other_runs_interval": differ}))  # fmt: skip
     for failure in report["criteria_failures"]:
         print(f"g1ctl: criterion missed: {failure}", file=sys.stderr)
     return 1 if report["criteria_failures"] else 0

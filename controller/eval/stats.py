@@ -72,3 +72,15 @@ def push_curves(conditions: dict[str, dict[str, Any]], level: float = 0.9) -> di
         for setup, points in sorted(curves.items())
         if any(impulse > 0 for impulse, _ in points)
     }
+
+
+def disagreements(first: dict[str, dict[str, Any]], second: dict[str, dict[str, Any]]) -> list[str]:
+    """Conditions whose survival in a re-run (`second`, other seeds) lies outside the first run's 95 % interval."""
+    lines = []
+    for group in sorted(set(first) & set(second)):
+        a, b = first[group], second[group]
+        if a["survival"] is None or b["survival"] is None:
+            continue
+        if not a["survival_ci95"][0] <= b["survival"] <= a["survival_ci95"][1]:
+            lines.append(f"{group}: survival {a['survival']:.2f} {a['survival_ci95']} against {b['survival']:.2f} {b['survival_ci95']}")
+    return lines

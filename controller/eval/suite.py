@@ -34,13 +34,14 @@ class SuiteConfig:
     planner: tuple[bool, ...] = (False,)
     hardware: tuple[str, ...] = ("none",)  # "none": the simulator directly
     perturbations: dict[str, Any] = field(default_factory=lambda: {"nominal": {}})  # label -> a set's name or its values
-    seeds: int = 3  # seeds 0..seeds-1 per combination
+    seeds: int = 3  # seeds first_seed .. first_seed + seeds - 1 per combination
+    first_seed: int = 0
     criteria: dict[str, Criteria] = field(default_factory=dict)  # condition label -> what it must meet
     description: str = ""
 
     def __post_init__(self) -> None:
-        if self.duration_s <= 0 or self.seeds < 1:
-            raise ConfigError("a suite needs duration_s > 0 and seeds >= 1")
+        if self.duration_s <= 0 or self.seeds < 1 or self.first_seed < 0:
+            raise ConfigError("a suite needs duration_s > 0, seeds >= 1 and first_seed >= 0")
 
 
 @dataclass(frozen=True)
@@ -90,7 +91,7 @@ def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
     return [
         Episode(scenario, policy, planner, hardware, label, conditions[label], seed, cfg.duration_s)
         for scenario, policy, planner, hardware, label, seed in itertools.product(
-            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, range(cfg.seeds)
+            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, range(cfg.first_seed, cfg.first_seed + cfg.seeds)
         )
     ]
 

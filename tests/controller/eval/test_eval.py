@@ -83,3 +83,14 @@ def test_push_curves_and_the_html_page(tmp_path: Path) -> None:
     page = (tmp_path / "tiny.html").read_text()
     assert page.startswith("<!doctype html>") and page.count("data:image/png;base64,") == 2  # survival, and the push curve
     assert "survival 0.00 &lt; 1.00" in page and report["push_curves"]
+
+
+def test_two_runs_disagree_only_outside_each_others_interval() -> None:
+    from controller.eval.stats import disagreements
+
+    def figures(survival: float, low: float, high: float) -> dict[str, object]:
+        return {"survival": survival, "survival_ci95": [low, high]}
+
+    first = {"a": figures(1.0, 0.51, 1.0), "b": figures(1.0, 0.51, 1.0), "c": figures(0.5, 0.15, 0.85)}
+    second = {"a": figures(0.75, 0.3, 0.95), "b": figures(0.0, 0.0, 0.49), "c": figures(0.5, 0.15, 0.85)}
+    assert [line.split(":")[0] for line in disagreements(first, second)] == ["b"]  # type: ignore[arg-type]
