@@ -1,7 +1,8 @@
 """Perturbations of a simulated run, each typed and seeded: what a robustness sweep varies.
 
-- The world and the body (`apply_to_model`, once, before the run): floor friction, a payload
-  on the torso, motor strength (effort limits scaled).
+- The world and the body (`apply_to_model`, once, before the run): friction, a payload on the
+  torso, motor strength (effort limits scaled); uneven ground is built into the scene itself
+  (`sim.world.SceneConfig`, bumps seeded from the run's seed).
 - Pushes (`PushSchedule`): a horizontal force on the pelvis for `duration_s`, every
   `interval_s` from `start_s`, in a seeded direction; the impulse is force times duration.
 - What the controller sees and sends (`PerturbedRobot`, a wrapper of the robot interface):
@@ -59,12 +60,14 @@ class Perturbations:
     gyro_noise_rad_s: float = 0.0
     imu_tilt_bias_deg: float = 0.0  # a fixed tilt of the IMU's attitude, in a seeded direction
     drop_rate: float = 0.0  # the share of sensor readings lost (the previous one is seen again)
+    terrain_height_m: float = 0.0  # uneven ground: seeded bumps up to this high (the scene is built with them, `sim.world`)
 
     def __post_init__(self) -> None:
         checks = {
             "friction_scale": self.friction_scale > 0, "torque_scale": self.torque_scale > 0, "gain_scale": self.gain_scale > 0,
             "payload_kg": self.payload_kg >= 0, "latency_ticks": self.latency_ticks >= 0, "joint_noise_rad": self.joint_noise_rad >= 0,
             "gyro_noise_rad_s": self.gyro_noise_rad_s >= 0, "drop_rate": 0.0 <= self.drop_rate < 1.0,
+            "terrain_height_m": 0.0 <= self.terrain_height_m <= 0.3,
         }  # fmt: skip
         bad = [name for name, ok in checks.items() if not ok]
         if bad:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 from hw.errors import AssetError
 from hw.g1 import EFFORT_LIMITS
@@ -22,6 +23,27 @@ class SceneConfig:
     timestep: float = 0.002
     floor_friction: float = 0.8
     solver_iterations: int = 50
+    terrain_height: float = 0.0  # m: > 0 makes the floor uneven ground (a seeded height field), flat within 1 m of the start
+    terrain_seed: int = 0
+
+
+TERRAIN_SIZE_M = 20.0  # the height field's side, centred on the start
+TERRAIN_CELLS = 161  # samples per side: 0.125 m apart
+TERRAIN_FLAT_RADIUS_M = 1.0  # the robot starts standing on flat ground
+
+
+def terrain_heights(height: float, seed: int) -> np.ndarray:
+    """Smooth seeded bumps in [0, 1] (times `height` in the scene), flat at 0 around the start: noise blurred over about 0.5 m."""
+    rng = np.random.default_rng([seed, 7])
+    noise = rng.standard_normal((TERRAIN_CELLS, TERRAIN_CELLS))
+    kernel = np.exp(-0.5 * (np.arange(-8, 9) / 3.0) ** 2)
+    for axis in (0, 1):  # a separable Gaussian blur
+        noise = np.apply_along_axis(lambda row: np.convolve(row, kernel / kernel.sum(), mode="same"), axis, noise)
+    heights = (noise - noise.min()) / max(float(np.ptp(noise)), 1e-9)
+    coords = np.linspace(-TERRAIN_SIZE_M / 2, TERRAIN_SIZE_M / 2, TERRAIN_CELLS)
+    radius = np.hypot(*np.meshgrid(coords, coords))
+    ramp = np.clip((radius - TERRAIN_FLAT_RADIUS_M) / TERRAIN_FLAT_RADIUS_M, 0.0, 1.0)  # 0 at the start, full 2 m out
+    return heights * ramp
 
 
 def build_model(mjcf_path: Path, cfg: SceneConfig = SceneConfig()) -> mujoco.MjModel:
@@ -55,11 +77,21 @@ def _add_environment(spec: mujoco.MjSpec, cfg: SceneConfig) -> None:
     )  # fmt: skip
     material = spec.add_material(name="grid", texuniform=True, texrepeat=[5, 5])
     material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "grid"
-    # The holosoma MJCF pairs each foot capsule with a geom named "floor".
-    spec.worldbody.add_geom(
-        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.01], material="grid",
-        friction=[cfg.floor_friction, 0.005, 0.0001], group=2,
-    )  # fmt: skip
+    # The holosoma MJCF pairs each foot capsule with a geom named "floor": uneven ground keeps the name.
+    if cfg.terrain_height > 0:
+        half = TERRAIN_SIZE_M / 2
+        heights = terrain_heights(cfg.terrain_height, cfg.terrain_seed)
+        spec.add_hfield(name="terrain", size=[half, half, cfg.terrain_height, 0.1], nrow=TERRAIN_CELLS, ncol=TERRAIN_CELLS,
+                        userdata=heights.ravel().tolist())  # fmt: skip
+        spec.worldbody.add_geom(
+            name="floor", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain", material="grid",
+            friction=[cfg.floor_friction, 0.005, 0.0001], group=2,
+        )  # fmt: skip
+    else:
+        spec.worldbody.add_geom(
+            name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.01], material="grid",
+            friction=[cfg.floor_friction, 0.005, 0.0001], group=2,
+        )  # fmt: skip
     spec.worldbody.add_light(pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, castshadow=0)
     # A camera that follows the pelvis, for videos.
     pelvis = spec.body("pelvis")

@@ -37,7 +37,7 @@ from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_robot_config
 from sim.perturbations import apply_to_model
 from sim.robot import SimRobot
-from sim.world import build_model
+from sim.world import SceneConfig, build_model
 
 if TYPE_CHECKING:
     from controller.inputs.base import CommandLimits
@@ -128,7 +128,8 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
 def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: RunHooks | None = None) -> _BuiltRun:
     """The G1 in MuJoCo, the tracker by name, the backend, the input and the outputs; all closed by `stack`."""
     assets = ensure_assets(cfg.assets_dir)
-    robot = SimRobot(build_model(assets.g1_mjcf))
+    ground = cfg.perturbations.terrain_height_m if cfg.perturbations is not None else 0.0
+    robot = SimRobot(build_model(assets.g1_mjcf, SceneConfig(terrain_height=ground, terrain_seed=cfg.seed)))
     stack.callback(robot.close)
     tracker_name = cfg.tracker or ("decoupled" if cfg.planner else "velocity")
     tracker = make_tracker(tracker_name, TrackerSpec(cfg.policy, assets, robot.joint_names))

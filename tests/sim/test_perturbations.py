@@ -86,3 +86,19 @@ def test_perturbations_reach_a_run_through_simulated_hardware() -> None:
     report = run(SimRunConfig(duration=3.0, hardware="sim-can", perturbations=shove))
     assert report["falls"] == 1 and report["pushes"][0]["start"] == 1.0  # on hardware a fall ends the run
     assert report["hw"]["faults"] == 0 and report["perturbations"]["latency_ticks"] == 1
+
+
+def test_uneven_ground_is_seeded_flat_at_the_start_and_is_the_floor(assets: object) -> None:
+    import mujoco
+
+    from sim.world import TERRAIN_CELLS, SceneConfig, terrain_heights
+
+    heights = terrain_heights(0.1, seed=2)
+    assert heights.shape == (TERRAIN_CELLS, TERRAIN_CELLS) and heights.min() >= 0.0 and heights.max() <= 1.0
+    assert heights[TERRAIN_CELLS // 2, TERRAIN_CELLS // 2] == 0.0 and heights.std() > 0.05  # flat where the robot starts
+    assert np.array_equal(heights, terrain_heights(0.1, seed=2)) and not np.array_equal(heights, terrain_heights(0.1, seed=3))
+    model = build_model(assets.g1_mjcf, SceneConfig(terrain_height=0.1, terrain_seed=2))  # type: ignore[attr-defined]
+    floor = model.geom("floor")
+    assert floor.type[0] == mujoco.mjtGeom.mjGEOM_HFIELD and model.hfield_size[0][2] == pytest.approx(0.1)
+    with pytest.raises(ConfigError, match="terrain_height_m"):
+        Perturbations(terrain_height_m=0.5)
