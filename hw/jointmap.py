@@ -18,7 +18,7 @@ from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
 from hw.protocols.mit import MitRanges
 from hw.shipped import config_dir
-from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset, with_g1_torque_limits
+from hw.yamlconfig import check_position_limits, from_dict, load_yaml, preset_names, resolve_preset, with_g1_torque_limits
 
 
 @dataclass(frozen=True)
@@ -57,9 +57,7 @@ class JointConfig:
     kd: float = 1.0
 
     def __post_init__(self) -> None:
-        lo, hi = self.position_limits
-        if not lo < hi:
-            raise ValueError(f"position_limits must be [low, high] with low < high, got {list(self.position_limits)}")
+        check_position_limits(self.position_limits)
         if self.direction not in (1, -1):
             raise ValueError(f"direction must be 1 or -1, got {self.direction}")
         if self.gear_ratio <= 0 or self.velocity_limit <= 0 or self.torque_limit <= 0:

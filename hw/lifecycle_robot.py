@@ -77,6 +77,10 @@ class LifecycleRobot(RobotInterface):
     def joint_names(self) -> tuple[str, ...]:
         return self._names
 
+    def lifecycle_report(self) -> dict[str, object]:
+        """What the safety layer did, for a run's report: values clamped, faults and why, the state at the end."""
+        return {"clamped_values": self.clamped_values, "faults": self.fault_count, "fault_reasons": self.faults, "state": self.state.value}
+
     # -- what a robot provides -------------------------------------------------------
     @abc.abstractmethod
     def _damp_now(self) -> None:

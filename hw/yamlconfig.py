@@ -154,3 +154,10 @@ def with_g1_torque_limits(data: Any) -> Any:
         for name, joint in joints.items()
     }
     return {**data, "joints": filled}
+
+
+def check_position_limits(limits: tuple[float, float]) -> None:
+    """A joint's [low, high] position limits, in that order (both joint-map kinds check them alike)."""
+    lo, hi = limits
+    if not lo < hi:
+        raise ValueError(f"position_limits must be [low, high] with low < high, got {list(limits)}")

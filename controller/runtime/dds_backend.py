@@ -103,11 +103,7 @@ class DdsBackend(Backend):
             "bad_frames": c.bad_frames,
             "mode_machine_changes": c.mode_machine_changes,
             "released_mode": self.host.released_mode,
-            "clamped_values": self.host.clamped_values,
-            "faults": self.host.fault_count,
-            "fault_reasons": self.host.faults,
-            "state": self.host.state.value,
-        }
+        } | self.host.lifecycle_report()
 
     def close(self) -> None:
         self.host.close()

@@ -63,11 +63,7 @@ class HardwareBackend(Backend):
             "bad_frames": c.bad_frames,
             "unknown_ids": c.unknown_ids,
             "error_frames": c.error_frames,
-            "clamped_values": self.host.clamped_values,
-            "faults": self.host.fault_count,
-            "fault_reasons": self.host.faults,
-            "state": self.host.state.value,
-        }
+        } | self.host.lifecycle_report()
 
     def close(self) -> None:
         self.host.close()

@@ -15,7 +15,7 @@ from typing import Any, Literal
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
-from hw.yamlconfig import from_dict, with_g1_torque_limits
+from hw.yamlconfig import check_position_limits, from_dict, with_g1_torque_limits
 
 
 @dataclass(frozen=True)
@@ -27,9 +27,7 @@ class DdsJointConfig:
     kd: float = 1.0
 
     def __post_init__(self) -> None:
-        lo, hi = self.position_limits
-        if not lo < hi:
-            raise ValueError(f"position_limits must be [low, high] with low < high, got {list(self.position_limits)}")
+        check_position_limits(self.position_limits)
         if self.velocity_limit <= 0 or self.torque_limit <= 0 or self.kp < 0 or self.kd < 0:
             raise ValueError("velocity_limit and torque_limit must be positive, kp and kd not negative")
 
