@@ -12,7 +12,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from controller.inputs.registry import INPUTS
 from hw.errors import ConfigError
@@ -105,7 +105,22 @@ def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
         hw = report["hw"]
         keys = ("cycle_ms", "frames_sent", "frames_received", "dropped", "commands_sent", "states_received", "crc_errors", "faults")
         print(json.dumps({"hw": {k: hw[k] for k in keys if k in hw}}))
-    if report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"):
+    faulted = report["final_mode"] == "damp" and report["damp_reason"].startswith("fault")
+    if faulted:
         print(f"g1ctl: run ended damped at {report['damp_time']} s: {report['damp_reason']}", file=sys.stderr)
-        return 1
-    return 0
+    if "drill" in report:  # a drill: the fault was the point, its verdict is the exit status
+        print(drill_line(report["drill"]))
+        return 0 if report["drill"]["passed"] else 1
+    return 1 if faulted else 0
+
+
+def drill_line(drill: dict[str, Any]) -> str:
+    """`drill PLAN: passed|FAILED: what happened` in one line."""
+    latency = drill.get("damping_latency_s")
+    did = (
+        f"every motor safe {1e3 * latency:.0f} ms after the fault (stated {1e3 * drill['within_s']:.0f} ms)" if latency is not None else ""
+    )
+    did = did or {"ride-through": "rode through", "clamped": "clamped"}.get(drill["expected"], drill["expected"])
+    wire = f"{drill['outside_limits']} commands outside the limits on the wire"
+    verdict = "passed" if drill["passed"] else f"FAILED: {'; '.join(drill['failures'])}"
+    return f"drill {drill['plan']}: {verdict} ({did}; {wire})"

@@ -9,15 +9,18 @@ per physics step (500 Hz), in lockstep with simulated time.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 
 from controller.runtime.backend import Backend
 from controller.runtime.hardware_backend import HardwareBackend
-from hw.emulation.faults import load_faults
+from hw.emulation.faults import load_fault_file, load_faults
+from hw.emulation.faulty_commands import FaultyCommands
 from hw.emulation.rig import SimulatedHardware
-from hw.hardware_robot import HardwareRobot
+from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import load_hardware_config
+from hw.robot import RobotInterface
 from hw.types import RobotState
 from sim.hardware_twin import MuJoCoPlant
 from sim.perturbations import Perturbations, PerturbedRobot, PushForces, push_schedule
@@ -28,6 +31,9 @@ from sim.robot import SimRobot
 # no simulated time, so replies may take longer in wall time than on real hardware.
 SIM_SOFT_START_S = 0.2
 SIM_CYCLE_TIMEOUT_S = 0.006
+# A robot that faulted stays damped after the run: its motors are watched this much longer, so
+# the wire audit records what each did last (damped, or limp on its own watchdog).
+WATCH_AFTER_FAULT_S = 0.2
 
 
 class DirectSimBackend(Backend):
@@ -86,9 +92,11 @@ class SimulatedHardwareBackend(HardwareBackend):
         self, truth: SimRobot, hardware: str, faults: str | None = None, perturbations: Perturbations | None = None,
         duration: float = 0.0, seed: int = 0,
     ) -> None:  # fmt: skip
-        """`perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them."""
+        """`faults`: a fault plan (name or path) the emulators and the controller's commands act out.
+        `perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them."""
         cfg = load_hardware_config(hardware)
-        plans = load_faults(faults, list(cfg.buses)) if faults else None
+        plan = load_fault_file(faults) if faults else None
+        plans = load_faults(plan, faults, list(cfg.buses)) if plan is not None and faults is not None else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
         cfg = dataclasses.replace(cfg, safety=safety)
         self.sim = truth
@@ -102,12 +110,20 @@ class SimulatedHardwareBackend(HardwareBackend):
         super().__init__(host, hardware, now=lambda: truth.time, after_cycle=self.twin.step)
         rng = np.random.default_rng(seed)
         self.pushes = PushForces(truth, push_schedule(perturbations.pushes if perturbations else None, duration, rng))
+        self._wrappers: list[RobotInterface] = []  # outermost last: the controller writes into it
         if perturbations is not None and perturbations.senses:
-            self.robot = PerturbedRobot(host, perturbations, rng)
+            self._wrappers.append(PerturbedRobot(host, perturbations, rng))
+        if plan is not None and plan.host.start_s is not None:
+            self._wrappers.append(FaultyCommands(self._wrappers[-1] if self._wrappers else host, plan.host, plant.time))
+        if self._wrappers:
+            self.robot = self._wrappers[-1]
 
     def cycle(self) -> None:
         self.pushes.apply()
         super().cycle()
+
+    def report(self) -> dict[str, Any]:
+        return super().report() | {"wire": self.twin.audit.report()}
 
     def truth(self) -> RobotState:
         return self.sim.read()
@@ -120,8 +136,12 @@ class SimulatedHardwareBackend(HardwareBackend):
 
     def close(self) -> None:
         try:
-            if self.robot is not self.host:
-                self.robot.close()
+            if self.host.state is Lifecycle.ERROR:
+                end = self.now() + WATCH_AFTER_FAULT_S
+                while self.now() < end:
+                    self.cycle()  # the host keeps damping
+            for wrapper in reversed(self._wrappers):
+                wrapper.close()
             super().close()
         finally:
             self.twin.close()

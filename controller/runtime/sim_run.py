@@ -33,6 +33,8 @@ from controller.runtime.sim_backends import DirectSimBackend, PerturbedSimBacken
 from controller.runtime.status import StatusLine
 from controller.tracking.registry import TrackerSpec, make_tracker
 from hw.dds.config import DdsHardwareConfig
+from hw.emulation.drill import judge_drill
+from hw.emulation.faults import check_plan_fits, load_fault_file
 from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_robot_config
 from sim.perturbations import apply_to_model
@@ -64,8 +66,8 @@ def _check(cfg: SimRunConfig) -> float | None:
     scenario = load_scenario(cfg.scenario) if cfg.input == "scripted" else None
     if cfg.hardware is not None:
         hardware = load_robot_config(cfg.hardware)
-        if isinstance(hardware, DdsHardwareConfig) and cfg.faults is not None:
-            raise ConfigError("--faults injects faults into simulated buses; a DDS config has none (its drills are in the tests)")
+        if cfg.faults is not None:
+            check_plan_fits(load_fault_file(cfg.faults), cfg.faults, isinstance(hardware, DdsHardwareConfig))
     elif cfg.faults is not None:
         raise ConfigError("--faults needs --hardware: faults are injected into simulated hardware")
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
@@ -118,6 +120,8 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
     hw = built.session.backend.report()  # after closing: the counters include the damped shutdown
     if hw is not None:
         report["hw"] = hw
+        if cfg.faults is not None:
+            report["drill"] = judge_drill(load_fault_file(cfg.faults), cfg.faults, hw, fell=report["falls"] > 0)
     _write_outputs(cfg, built.session, report)
     if outcome.error is not None:
         where = f"; report: {cfg.report}" if cfg.report else ""

@@ -1,13 +1,21 @@
-"""Faults an emulator can be told to produce, changed live by tests or set from config."""
+"""Faults an emulator can be told to produce, changed live by tests or set from a fault plan.
+
+A fault plan (`configs/faults/*.yaml`, `g1ctl sim --hardware X --faults PLAN`) is a drill: what
+goes wrong on which bus (or in the controller's own commands, or in a simulated G1 over DDS),
+from when, and what the stack must do about it (`DrillExpectation`): damp every motor within a
+stated time, ride through, or clamp. The run's report says whether it did (`hw.drill`).
+"""
 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass, field, fields, replace
+from typing import Literal
 
+from hw.emulation.g1_faults import RobotFault
 from hw.errors import ConfigError
-from hw.yamlconfig import load_config
+from hw.shipped import config_dir
+from hw.yamlconfig import load_config, preset_names, resolve_preset
 
 
 @dataclass
@@ -21,10 +29,22 @@ class FaultPlan:
     bus_off: bool = False  # the bus goes silent after one error frame
     silent: bool = False  # IMU: stop sending frames
     seed: int = 0
+    start_s: float = 0.0  # simulated time from which `pending` is in force
+    pending: FaultSpec | None = None  # faults held back until `update` reaches start_s
     rng: random.Random = field(init=False)
 
     def __post_init__(self) -> None:
         self.rng = random.Random(self.seed)
+
+    def update(self, now: float) -> None:
+        """Switch the held-back faults on once simulated time reaches `start_s`."""
+        spec = self.pending
+        if spec is not None and now >= self.start_s:
+            self.pending = None
+            live = spec.plan(held_back=False)
+            for f in fields(self):
+                if f.init and f.name not in ("seed", "start_s", "pending"):
+                    setattr(self, f.name, getattr(live, f.name))
 
     def drop(self) -> bool:
         return self.drop_reply_prob > 0 and self.rng.random() < self.drop_reply_prob
@@ -51,15 +71,24 @@ class FaultSpec:
     bus_off: bool = False
     silent: bool = False
     seed: int = 0
+    start_s: float = 0.0  # simulated seconds from the start of the run
 
     def __post_init__(self) -> None:
         for name in ("drop_reply_prob", "corrupt_prob"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name} must be within [0, 1], got {getattr(self, name)}")
-        if self.delay_reply_s < 0:
-            raise ValueError(f"delay_reply_s must be >= 0, got {self.delay_reply_s}")
+        if self.delay_reply_s < 0 or self.start_s < 0:
+            raise ValueError("delay_reply_s and start_s must be >= 0")
 
-    def plan(self) -> FaultPlan:
+    @property
+    def starts_fault(self) -> bool:
+        """True when this spec makes something go wrong (not only seeds a bus)."""
+        return replace(self, seed=0, start_s=0.0) != FaultSpec()
+
+    def plan(self, held_back: bool = True) -> FaultPlan:
+        """The live plan; with a `start_s`, nominal (only seeded) until its `update` reaches that time."""
+        if held_back and self.start_s > 0:
+            return FaultPlan(seed=self.seed, start_s=self.start_s, pending=self)
         return FaultPlan(
             drop_reply_prob=self.drop_reply_prob,
             delay_reply_s=self.delay_reply_s,
@@ -74,15 +103,76 @@ class FaultSpec:
 
 
 @dataclass(frozen=True)
+class HostFaults:
+    """Faults of the controller itself, on the host side of the safety layer: the commands it writes go bad."""
+
+    nan_command_s: float | None = None  # from this time on, every command the controller writes is NaN
+    wild_command_s: float | None = None  # from this time on, commands far outside every limit (10 rad, 1000 rad/s, 10 kN m)
+
+    @property
+    def start_s(self) -> float | None:
+        times = [t for t in (self.nan_command_s, self.wild_command_s) if t is not None]
+        return min(times) if times else None
+
+
+@dataclass(frozen=True)
+class DrillExpectation:
+    """What the stack must do about the plan's faults; checked on what the emulated motors decoded from the frames."""
+
+    outcome: Literal["damping", "ride-through", "clamped"] = "damping"
+    within_s: float = 0.1  # damping: every motor safe (damped, or limp on its own watchdog or error) this soon after the fault
+    names: str = ""  # damping: the latched fault names this (a joint, a bus, "IMU", "non-finite", ...)
+
+    def __post_init__(self) -> None:
+        if self.within_s <= 0:
+            raise ValueError(f"within_s must be positive, got {self.within_s}")
+
+
+@dataclass(frozen=True)
 class FaultFile:
-    """Faults per bus name, injected into simulated hardware (`g1ctl sim --hardware X --faults FILE`)."""
+    """A drill: faults per bus name, in the controller's commands, or in a simulated G1 over DDS, and what must follow."""
 
-    buses: dict[str, FaultSpec]
+    hardware: str = "sim-can"  # the hardware config the plan is written for (its bus names)
+    description: str = ""
+    buses: dict[str, FaultSpec] = field(default_factory=dict)
+    host: HostFaults = field(default_factory=HostFaults)
+    robot: tuple[str, ...] = ()  # a simulated G1 over DDS: `KIND@SECONDS` faults (hw.emulation.g1_faults)
+    expect: DrillExpectation = field(default_factory=DrillExpectation)
+
+    def __post_init__(self) -> None:
+        for text in self.robot:
+            RobotFault.parse(text)  # one line naming the kinds when it is wrong
+
+    @property
+    def start_s(self) -> float | None:
+        """When the first fault of the plan strikes (None: the plan has none, only seeds)."""
+        times = [s.start_s for s in self.buses.values() if s.starts_fault]
+        times += [RobotFault.parse(text).at_s for text in self.robot]
+        if self.host.start_s is not None:
+            times.append(self.host.start_s)
+        return min(times) if times else None
 
 
-def load_faults(path: str, bus_names: list[str]) -> dict[str, FaultPlan]:
-    spec = load_config(FaultFile, Path(path))
-    unknown = [b for b in spec.buses if b not in bus_names]
+def available_fault_plans() -> list[str]:
+    return preset_names(config_dir("faults"))
+
+
+def load_fault_file(name_or_path: str) -> FaultFile:
+    """A shipped plan by name (`configs/faults/`) or a YAML file by path."""
+    return load_config(FaultFile, resolve_preset(name_or_path, config_dir("faults"), "fault plan"))
+
+
+def load_faults(plan: FaultFile, source: str, bus_names: list[str]) -> dict[str, FaultPlan]:
+    """The live plan per bus; a bus the hardware config lacks is named in one line."""
+    unknown = [b for b in plan.buses if b not in bus_names]
     if unknown:
-        raise ConfigError(f"{path}: buses {unknown} are not in the hardware config (buses: {', '.join(bus_names)})")
-    return {bus: s.plan() for bus, s in spec.buses.items()}
+        raise ConfigError(f"{source}: buses {unknown} are not in the hardware config (buses: {', '.join(bus_names)})")
+    return {bus: s.plan() for bus, s in plan.buses.items()}
+
+
+def check_plan_fits(plan: FaultFile, source: str, dds: bool) -> None:
+    """Bus faults need simulated buses, `robot:` faults a simulated G1 over DDS: one line when they do not fit."""
+    if dds and plan.buses:
+        raise ConfigError(f"{source}: a DDS config has no buses to fault; give the simulated G1's faults under 'robot:' (e.g. [stale@3])")
+    if not dds and plan.robot:
+        raise ConfigError(f"{source}: 'robot:' faults are for a simulated G1 over DDS (--hardware sim-dds); this config has buses")

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from hw.emulation.plant import Plant
+from hw.emulation.wire_audit import MotorState, WireAudit
 from hw.jointmap import JointConfig, joint_to_motor, motor_to_joint
 from hw.protocols.command import MotorCommand
 
@@ -33,8 +34,10 @@ class EmulatedMotor:
     error_code: int = 0
     last_command_time: float | None = None
     stalled_torque: float | None = None  # motor side: what a seized motor's controller pushes
+    audit: WireAudit | None = None  # told each control step what this motor decoded and what state it is in
     _last_command: MotorCommand | None = None
     _thermal_time: float | None = None
+    _state: MotorState = "limp"
 
     def apply(self, plant: Plant, command: MotorCommand | None, over_temperature_code: int, stuck: bool) -> None:
         """Take a new command (None: keep the last) and push the resulting PD law into the plant."""
@@ -46,6 +49,11 @@ class EmulatedMotor:
             self.last_command_time, self._last_command = now, command
         expired = self.last_command_time is None or now - self.last_command_time > self.watchdog_s
         self.stalled_torque = None
+        joint_command = None
+        if command is not None:
+            q, dq, tau = motor_to_joint(self.joint, command.position + self.encoder_zero, command.velocity, command.torque)
+            g2 = self.joint.gear_ratio**2
+            joint_command = (q, dq, command.kp * g2, command.kd * g2, tau)
         if stuck:
             # The output is seized: the joint does not move, and the motor's own PD pushes
             # against the seizure, so its current (the reported torque) grows with the error.
@@ -55,12 +63,17 @@ class EmulatedMotor:
                 position, velocity, _ = self.reading(plant)
                 pushed = c.kp * (c.position - position) + c.kd * (c.velocity - velocity) + c.torque
                 self.stalled_torque = max(-self.torque_max, min(self.torque_max, pushed))
+            self._state = "seized"
         elif not self.enabled or self.error_code != 0 or (command is None and expired):
             plant.set_joint_command(self.joint_name, 0.0, 0.0, 0.0, 0.0, 0.0)  # limp
-        elif command is not None:
-            q, dq, tau = motor_to_joint(self.joint, command.position + self.encoder_zero, command.velocity, command.torque)
-            g2 = self.joint.gear_ratio**2
-            plant.set_joint_command(self.joint_name, q, dq, command.kp * g2, command.kd * g2, tau)
+            self._state = "limp"
+        elif joint_command is not None:
+            q, dq, kp, kd, tau = joint_command
+            plant.set_joint_command(self.joint_name, q, dq, kp, kd, tau)
+            self._state = "active" if kp > 0 else ("damping" if kd > 0 else "limp")
+        if self.audit is not None:
+            wire = None if joint_command is None else (joint_command[0], joint_command[1], joint_command[2], joint_command[4])
+            self.audit.motor_step(self.joint_name, now, self._state, wire)
 
     def _heat(self, plant: Plant, now: float) -> None:
         if self._thermal_time is not None and now > self._thermal_time:

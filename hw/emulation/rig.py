@@ -19,17 +19,21 @@ from hw.emulation.faults import FaultPlan
 from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
+from hw.emulation.wire_audit import WireAudit
 from hw.errors import ConfigError, EmulatorError
 from hw.jointmap import BusConfig, HardwareConfig, load_motor_models
 from hw.protocols.mit import MitRanges, ReplyVariant
+from hw.safety import JointLimits
 
 
 class SimulatedHardware:
-    """Starts an emulator behind every bus of `cfg`; close() stops them."""
+    """Starts an emulator behind every bus of `cfg`; close() stops them. `audit` holds what the motors decoded."""
 
     def __init__(self, cfg: HardwareConfig, plant: Plant, faults: dict[str, FaultPlan] | None = None) -> None:
         self.plant = plant
         self.faults = faults or {}
+        names = tuple(cfg.joints)
+        self.audit = WireAudit(names, JointLimits.from_joint_map(names, cfg.joints))
         token = uuid.uuid4().hex[:8]
         models = load_motor_models()
         self.emulators: list[MitBusEmulator | Rs485PortEmulator] = []
@@ -48,7 +52,7 @@ class SimulatedHardware:
                     motors: dict[int, tuple[EmulatedMotor, MitRanges, ReplyVariant]] = {}
                     for jname, jc in joints.items():
                         ranges = models[jc.model]
-                        motors[jc.id] = (EmulatedMotor(jname, jc, ranges.t_max), ranges, jc.reply)
+                        motors[jc.id] = (EmulatedMotor(jname, jc, ranges.t_max, audit=self.audit), ranges, jc.reply)
                     self.emulators.append(MitBusEmulator(name, emu_bus, motors, plant, plan))
                 else:
                     master, slave = os.openpty()
@@ -59,7 +63,8 @@ class SimulatedHardware:
                         self.imu = ImuEmulator(master, plant, plan)
                     else:
                         rs_motors = {
-                            jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio) for jname, jc in joints.items()
+                            jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio, audit=self.audit)
+                            for jname, jc in joints.items()
                         }
                         self.emulators.append(Rs485PortEmulator(name, master, rs_motors, plant, plan))
         except Exception:
@@ -79,6 +84,9 @@ class SimulatedHardware:
                     f"the firmware emulator of bus '{emulator.name}' died: {type(exc).__name__}: {exc}; "
                     "its motors no longer answer, so the run stops (the log has the traceback)"
                 ) from exc
+        now = self.plant.time()
+        for plan in self.faults.values():
+            plan.update(now)  # faults held back to their start time
         for emulator in self.emulators:
             emulator.tick()
         step = getattr(self.plant, "step", None)

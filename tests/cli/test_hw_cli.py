@@ -160,14 +160,26 @@ def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
 
     overheat_path = tmp_path / "overheat.json"
-    overheat_faults = "configs/faults/overheat-left-knee.yaml"
-    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", overheat_faults, "--duration", "1", "--report", str(overheat_path))
-    assert overheat.returncode == 1
+    overheat = g1ctl("sim", "--hardware", "sim-can", "--faults", "overheat-left-knee", "--duration", "3.5", "--report", str(overheat_path))
+    assert overheat.returncode == 0, overheat.stderr  # a drill's exit status is its verdict
     assert "left_knee_joint" in overheat.stderr and "over-temperature" in overheat.stderr
-    report = json.loads(overheat_path.read_text())  # a run that ends in a fault at bring-up still reports
+    assert "drill overheat-left-knee: passed (every motor safe" in overheat.stdout
+    report = json.loads(overheat_path.read_text())
     assert report["final_mode"] == "damp" and "over-temperature" in report["damp_reason"] and report["damp_time"] is not None
     assert report["hw"]["faults"] >= 1 and report["hw"]["state"] in ("error", "closed") and report["hw"]["frames_sent"] > 0
+    drill = report["drill"]
+    assert drill["passed"] and drill["fault_at_s"] == 3.0 and 0 <= drill["damping_latency_s"] <= 0.02
+    assert drill["limp_joints"] == ["left_knee_joint"] and report["hw"]["wire"]["outside_limits"] == 0
     assert overheat_path.with_suffix(".png").is_file()
+
+    early = g1ctl("sim", "--hardware", "sim-can", "--faults", "overheat-left-knee", "--duration", "1")
+    assert early.returncode == 1 and "before the fault struck at 3.00 s: run it longer" in early.stdout
+
+    at_bring_up = tmp_path / "hot-at-start.yaml"  # a fault from the start: bring-up refuses to activate, and still reports
+    at_bring_up.write_text("buses:\n  can0: {over_temperature: [4]}\n")
+    refused = g1ctl("sim", "--hardware", "sim-can", "--faults", str(at_bring_up), "--duration", "1", "--report", str(tmp_path / "r.json"))
+    assert refused.returncode == 0 and "cannot activate: left_knee_joint" in refused.stderr
+    assert json.loads((tmp_path / "r.json").read_text())["drill"]["damping_latency_s"] == 0.0
 
     assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
     bad = tmp_path / "bad.yaml"

@@ -1,0 +1,103 @@
+"""What reached the motors, as their firmware decoded it from the frames: the judge of a fault drill.
+
+The host's own counters say what it meant to send; a drill is judged on what arrived. Every
+emulated motor reports each control step: the command it decoded (joint side, quantized as
+the firmware sees it) and the state it is in: `active` (holding a position with stiffness),
+`damping` (zero stiffness, some damping: the host's safe state), `limp` (no torque: its own
+watchdog, a latched error, motor mode off) or `seized` (the stuck-motor drill). The audit
+counts commands outside the joint map's limits and finds when every motor was last brought
+to a safe state and stayed there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from hw.safety import JointLimits, outside_limits
+
+MotorState = Literal["active", "damping", "limp", "seized"]
+SAFE: frozenset[str] = frozenset({"damping", "limp"})
+EXAMPLES_KEPT = 5
+
+
+@dataclass(frozen=True)
+class WireViolation:
+    time: float
+    joint: str
+    q: float
+    dq: float
+    tau: float
+
+
+class WireAudit:
+    """Fed by the emulated motors (one call per motor and control step, or one per whole-robot frame)."""
+
+    def __init__(self, names: tuple[str, ...], limits: JointLimits) -> None:
+        self.names = names
+        self.limits = limits
+        self._index = {name: i for i, name in enumerate(names)}
+        self.commands = 0
+        self.last_time: float | None = None
+        self.outside = 0
+        self.examples: list[WireViolation] = []
+        self.state: list[MotorState | None] = [None] * len(names)
+        self.safe_from = np.full(len(names), np.nan)  # when each motor last became safe (NaN: it is not)
+        self.safe_kind: list[str] = [""] * len(names)  # how each motor is safe now: "damping" or "limp"
+
+    def motor_step(self, joint: str, time: float, state: MotorState, command: tuple[float, float, float, float] | None) -> None:
+        """One motor's control step: its state, and the command it decoded now (q, dq, kp, tau; joint side) if any."""
+        i = self._index[joint]
+        if command is not None:
+            self._check(time, np.array([i]), *(np.array([v]) for v in command))
+        self._set_state(i, time, state)
+
+    def robot_frame(self, time: float, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray) -> None:
+        """A whole-robot command (a G1's `LowCmd_`), every joint at once."""
+        self._check(time, np.arange(len(self.names)), q, dq, kp, tau)
+        for i in range(len(self.names)):
+            self._set_state(i, time, "active" if kp[i] > 0 else ("damping" if kd[i] > 0 else "limp"))
+
+    def all_limp(self, time: float) -> None:
+        """The robot's firmware went limp on every joint (no command for too long)."""
+        for i in range(len(self.names)):
+            self._set_state(i, time, "limp")
+
+    def _check(self, time: float, index: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> None:
+        self.commands += len(index)
+        bad = outside_limits(self.limits, index, q, dq, kp, tau)
+        for k in np.flatnonzero(bad):
+            self.outside += 1
+            if len(self.examples) < EXAMPLES_KEPT:
+                joint = self.names[int(index[k])]
+                self.examples.append(WireViolation(round(time, 4), joint, float(q[k]), float(dq[k]), float(tau[k])))
+
+    def _set_state(self, i: int, time: float, state: MotorState) -> None:
+        self.last_time = time
+        was_safe = self.state[i] in SAFE
+        self.state[i] = state
+        if state in SAFE:
+            self.safe_kind[i] = state
+            if not was_safe:
+                self.safe_from[i] = time
+        else:
+            self.safe_from[i] = np.nan
+
+    def safe_since(self) -> float | None:
+        """The time from which every motor has been safe (None: one is still active, or never reported)."""
+        if np.isnan(self.safe_from).any():
+            return None
+        return float(self.safe_from.max())
+
+    def report(self) -> dict[str, Any]:
+        since = self.safe_since()
+        return {
+            "commands": self.commands,
+            "outside_limits": self.outside,
+            "outside_examples": [vars(v) for v in self.examples],
+            "safe_since": None if since is None else round(since, 4),
+            "observed_until": None if self.last_time is None else round(self.last_time, 4),
+            "limp_joints": [n for n, kind in zip(self.names, self.safe_kind, strict=True) if since is not None and kind == "limp"],
+        }
