@@ -29,11 +29,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from hw.dds.session import DdsConfig
 from hw.emulation.g1_faults import RobotFault
 from hw.emulation.g1_lowlevel import LowLevelConfig
+
+if TYPE_CHECKING:
+    from hw.emulation.wire_audit import WireAudit
 
 LOCKSTEP_SILENCE = 50  # periods without a command before a lock-step robot publishes on its own
 TRUTH_EVERY = 5  # ticks between ground-truth samples (100 Hz at a 2 ms period)
@@ -53,6 +56,7 @@ class DdsRobotConfig:
     faults: tuple[RobotFault, ...] = ()
     remote: Callable[[float], bytes] | None = None  # wireless_remote's 40 bytes by the time since the first command; None: zeros
     gantry: bool = False  # hang the pelvis in a virtual gantry (bring-up: a sweep cannot tip it over)
+    joint_map: str | None = None  # a DDS hardware config: every command taken is audited against its limits
 
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
@@ -75,6 +79,21 @@ def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
             signal.signal(s, handler)
 
 
+def _audit(joint_map: str) -> WireAudit:
+    """The audit of every command taken, against the joint limits of a DDS hardware config (times: simulated seconds)."""
+    from hw import g1  # noqa: PLC0415
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.emulation.wire_audit import WireAudit  # noqa: PLC0415
+    from hw.errors import ConfigError  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
+    from hw.safety import JointLimits  # noqa: PLC0415
+
+    cfg = load_robot_config(joint_map)
+    if not isinstance(cfg, DdsHardwareConfig):
+        raise ConfigError(f"--joint-map {joint_map}: a simulated G1 over DDS needs a DDS hardware config (transport: dds)")
+    return WireAudit(g1.JOINT_NAMES, JointLimits.from_joint_map(g1.JOINT_NAMES, cfg.joints))
+
+
 class _Server:
     """The robot's loop, one `tick()` per period (lock-step: per command, or per period without one)."""
 
@@ -92,7 +111,8 @@ class _Server:
         self.robot = SimRobot(build_model(cfg.mjcf))
         self.session = DdsSession(cfg.dds)
         self.plant = MuJoCoPlant(self.robot, gantry_height=GANTRY_HEIGHT_M if cfg.gantry else None)
-        self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel)
+        self.audit = _audit(cfg.joint_map) if cfg.joint_map is not None else None
+        self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel, self.audit)
         self.commands = self.session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
         self.states = self.session.writer(cfg.dds.lowstate_topic, messages.LowState_)
         self.command_arrived = self.session.wait_set(self.commands)
@@ -194,7 +214,7 @@ class _Server:
             "sim_seconds": round(self.plant.time(), 3), "limp": self.lowlevel.limp, "limp_reason": self.lowlevel.limp_reason,
             "motion_mode": self.motion.mode, "motion_release_requests": self.motion.counters.release_requests,
             "commands_while_high_level": self.refused, "faults": sorted(self.faults_seen),
-        }  # fmt: skip
+        } | ({"wire": self.audit.report()} if self.audit is not None else {})  # fmt: skip
 
     def close(self) -> None:
         self.session.close()

@@ -30,6 +30,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help=f"develop a fault this long after the first command ({', '.join(KINDS)}); repeatable",
     )  # fmt: skip
     robot.add_argument(
+        "--joint-map", default=None, metavar="CONFIG",
+        help="a DDS hardware config whose joint limits judge every command taken (its report's 'wire' section)",
+    )  # fmt: skip
+    robot.add_argument(
         "--remote", default=None, metavar="SCENARIO",
         help="feed LowState_.wireless_remote from a scenario (name or .yaml; its time starts with the first command taken), "
         "or from 'keyboard' or 'gamepad' (default: a remote at rest)",
@@ -48,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, dds=DdsConfig(domain=args.domain, interface=args.interface),
         lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration, motion_mode=args.motion_mode,
         truth=args.truth, lockstep=args.lockstep, gantry=args.gantry, faults=tuple(RobotFault.parse(f) for f in args.fault),
+        joint_map=args.joint_map,
     )  # fmt: skip
     with ExitStack() as stack:
         cfg = dataclasses.replace(cfg, remote=_remote(args.remote, stack))

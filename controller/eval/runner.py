@@ -22,7 +22,7 @@ from tqdm import tqdm
 from controller.eval.executor import Executor, TaskLost
 from controller.eval.html import write_html
 from controller.eval.stats import push_curves, summarize
-from controller.eval.suite import Episode, SuiteConfig, episodes
+from controller.eval.suite import Criteria, Episode, SuiteConfig, episodes
 from controller.reports import write_report
 from sim.perturbations import Perturbations
 
@@ -48,6 +48,7 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
     cfg = SimRunConfig(
         scenario=episode.scenario, policy=episode.policy, planner=episode.planner, duration=episode.duration_s, seed=episode.seed,
         hardware=None if episode.hardware == "none" else episode.hardware, perturbations=perturbed, assets_dir=assets_dir,
+        faults=episode.faults,
     )  # fmt: skip
     t0 = time.perf_counter()
     try:
@@ -63,8 +64,15 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
         "push_impulse_ns": report.get("push_impulse_ns", 0.0),
         "pushes_only": dataclasses.replace(episode.perturbations, pushes=None) == Perturbations(),  # on the push curve
         "pushes": len(report.get("pushes", [])),
+        "outside_limits": report["hw"]["wire"]["outside_limits"] if "wire" in report.get("hw", {}) else None,  # on the wire
+        "drill": _drill_summary(report["drill"]) if "drill" in report else None,
         "episode_seconds": round(time.perf_counter() - t0, 3),
     }
+
+
+def _drill_summary(drill: dict[str, Any]) -> dict[str, Any]:
+    keys = ("passed", "expected", "fault_at_s", "within_s", "damping_latency_s", "outside_limits", "failures", "faults")
+    return {k: drill[k] for k in keys if k in drill}
 
 
 def run_suite(cfg: EvalConfig) -> dict[str, Any]:
@@ -104,7 +112,7 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
         "push_curves": push_curves(conditions),
         "episodes": results,
     }
-    report["criteria_failures"] = criteria_failures(cfg.suite, conditions)
+    report["criteria_failures"] = safety_failures(conditions) + criteria_failures(cfg.suite, conditions)
     if cfg.report is not None:
         write_report(report, cfg.report)
         write_html(report, cfg.report.with_suffix(".html"))
@@ -116,6 +124,8 @@ def criteria_failures(suite: SuiteConfig, conditions: dict[str, dict[str, Any]])
     failures = []
     for group, figures in conditions.items():
         criteria = suite.criteria.get(figures["condition"])
+        if criteria is None and figures.get("drills"):
+            criteria = Criteria()  # a drill's episodes must all run
         if criteria is None:
             continue
         if figures["failed_episodes"]:
@@ -125,6 +135,17 @@ def criteria_failures(suite: SuiteConfig, conditions: dict[str, dict[str, Any]])
         error = figures["velocity_error_mean"]
         if criteria.max_velocity_error is not None and error is not None and error > criteria.max_velocity_error:
             failures.append(f"{group}: velocity error {error:.3f} m/s > {criteria.max_velocity_error:.3f}")
+    return failures
+
+
+def safety_failures(conditions: dict[str, dict[str, Any]]) -> list[str]:
+    """What no suite may waive: a drill that did not do what its plan expects, a command outside the limits on the wire."""
+    failures = []
+    for group, figures in conditions.items():
+        for line in figures.get("drill_failures", []):
+            failures.append(f"{group}: drill failed: {line}")
+        if figures.get("outside_limits"):
+            failures.append(f"{group}: {figures['outside_limits']} commands outside the joint limits reached the motors")
     return failures
 
 

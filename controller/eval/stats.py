@@ -41,6 +41,21 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "push_impulse_ns": rs[0].get("push_impulse_ns", 0.0),
             "pushes_only": all(r.get("pushes_only", False) for r in done),
         }
+        walls = [r["outside_limits"] for r in done if r.get("outside_limits") is not None]
+        if walls:  # simulated hardware: commands outside the joint limits, decoded on the wire
+            summary[group]["outside_limits"] = sum(walls)
+        drills = [r["drill"] for r in done if r.get("drill")]
+        if drills:
+            latencies = [d["damping_latency_s"] for d in drills if d.get("damping_latency_s") is not None]
+            summary[group] |= {
+                "drills": len(drills),
+                "drills_passed": sum(d["passed"] for d in drills),
+                "damping_latency_max_s": max(latencies) if latencies else None,
+                "within_s": drills[0]["within_s"] if drills[0]["expected"] == "damping" else None,
+                "drill_failures": [
+                    f"seed {r['seed']}: {'; '.join(r['drill']['failures'])}" for r in done if r.get("drill") and not r["drill"]["passed"]
+                ],
+            }
     return summary
 
 

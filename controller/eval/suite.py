@@ -1,9 +1,11 @@
 """An evaluation suite (YAML) and the episodes it crosses into.
 
 A suite names what varies: scenarios, policies, whether the planner is in the loop, hardware
-configs, perturbation conditions (a shipped set by name, or inline values) and seeds; pass
-criteria may hold per condition. Every combination is an `Episode` with a stable id, so a
-report lists each episode's seed and result and an interrupted sweep knows what is done.
+configs, perturbation conditions (a shipped set by name, or inline values), fault drills (plans
+of `configs/faults/`, each on the simulated hardware it is written for) and seeds; pass
+criteria may hold per condition, and every drill carries its own (what the plan expects). Every
+combination is an `Episode` with a stable id, so a report lists each episode's seed and result
+and an interrupted sweep knows what is done.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from hw.emulation.faults import available_fault_plans, load_fault_file
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset
@@ -34,6 +37,7 @@ class SuiteConfig:
     planner: tuple[bool, ...] = (False,)
     hardware: tuple[str, ...] = ("none",)  # "none": the simulator directly
     perturbations: dict[str, Any] = field(default_factory=lambda: {"nominal": {}})  # label -> a set's name or its values
+    faults: tuple[str, ...] = ()  # fault drills: plans by name or path ("all": every plan of configs/faults)
     seeds: int = 3  # seeds first_seed .. first_seed + seeds - 1 per combination
     first_seed: int = 0
     criteria: dict[str, Criteria] = field(default_factory=dict)  # condition label -> what it must meet
@@ -54,6 +58,7 @@ class Episode:
     perturbations: Perturbations
     seed: int
     duration_s: float
+    faults: str | None = None  # a fault plan: this episode is a drill
 
     @property
     def group(self) -> str:
@@ -82,18 +87,42 @@ def _perturbations(label: str, value: Any, source: str) -> Perturbations:
     return from_dict(Perturbations, value or {}, source, f"perturbations.{label}")
 
 
+def fault_plans(cfg: SuiteConfig) -> dict[str, tuple[str, str]]:
+    """The suite's drills: label -> the plan (a shipped name, or an absolute path a worker elsewhere can open) and its hardware."""
+    shipped = available_fault_plans()
+    names = [n for n in cfg.faults if n != "all"] + (shipped if "all" in cfg.faults else [])
+    plans = {}
+    for name in dict.fromkeys(names):
+        plan = name if name in shipped else str(Path(name).resolve())
+        plans[Path(name).stem] = (plan, load_fault_file(plan).hardware)
+    return plans
+
+
 def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
-    """Every combination, seeds innermost, in a fixed order."""
+    """Every combination, seeds innermost, in a fixed order: the perturbed conditions, then the drills."""
     conditions = {label: _perturbations(label, value, source) for label, value in cfg.perturbations.items()}
-    unknown = [label for label in cfg.criteria if label not in conditions]
+    drills = fault_plans(cfg)
+    clash = sorted(set(conditions) & set(drills))
+    if clash:
+        raise ConfigError(f"{source}: {', '.join(clash)} is both a perturbation label and a fault plan: rename the label")
+    unknown = [label for label in cfg.criteria if label not in conditions and label not in drills]
     if unknown:
-        raise ConfigError(f"{source}: criteria for unknown conditions: {', '.join(unknown)} (conditions: {', '.join(conditions)})")
-    return [
+        known = ", ".join([*conditions, *drills])
+        raise ConfigError(f"{source}: criteria for unknown conditions: {', '.join(unknown)} (conditions: {known})")
+    seeds = range(cfg.first_seed, cfg.first_seed + cfg.seeds)
+    perturbed = [
         Episode(scenario, policy, planner, hardware, label, conditions[label], seed, cfg.duration_s)
         for scenario, policy, planner, hardware, label, seed in itertools.product(
-            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, range(cfg.first_seed, cfg.first_seed + cfg.seeds)
+            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, seeds
         )
     ]
+    drilled = [
+        Episode(scenario, policy, planner, drills[label][1], label, Perturbations(), seed, cfg.duration_s, faults=drills[label][0])
+        for scenario, policy, planner, label, seed in itertools.product(cfg.scenarios, cfg.policies, cfg.planner, drills, seeds)
+    ]
+    if not perturbed and not drilled:
+        raise ConfigError(f"{source}: the suite has no episodes: give perturbation conditions or fault plans")
+    return perturbed + drilled
 
 
 def suite_path(name_or_path: str) -> Path:

@@ -171,12 +171,19 @@ class SimulatedDdsBackend(DdsBackend):
         """`robot_args`: more flags for `g1ctl robot --dds` (e.g. `--remote SCENARIO`: its wireless remote plays a scenario)."""
         if not cfg.simulated:
             raise ConfigError(f"hardware config '{config_name}' is a real robot ('simulated: false'): g1ctl sim drives simulated robots")
-        cfg = dataclasses.replace(cfg, safety=dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S))
+        from hw.dds.domains import claim_domain  # noqa: PLC0415
         from hw.dds.session import DdsSession  # noqa: PLC0415 - the g1 extra
         from sim.dds_truth import TRUTH_TOPIC, SimTruth_  # noqa: PLC0415
 
+        self.domain = claim_domain(cfg.dds.domain)  # parallel runs on one machine each on a domain of their own
+        dds = dataclasses.replace(cfg.dds, domain=self.domain.domain)
+        cfg = dataclasses.replace(cfg, dds=dds, safety=dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S))
         self.mirror = mirror
-        self.robot_process = RobotProcess(cfg, assets_dir, robot_args)
+        try:
+            self.robot_process = RobotProcess(cfg, assets_dir, robot_args)
+        except Exception:
+            self.domain.release()
+            raise
         try:
             self._truth_session = DdsSession(cfg.dds)
             self._truth = self._truth_session.reader(TRUTH_TOPIC, SimTruth_)
@@ -184,6 +191,7 @@ class SimulatedDdsBackend(DdsBackend):
             super().__init__(DdsRobot(cfg, clock=clock.now), config_name, clock)
         except Exception:
             self.robot_process.stop()
+            self.domain.release()
             raise
         self.truth_time: float | None = None
 
@@ -207,7 +215,10 @@ class SimulatedDdsBackend(DdsBackend):
         return self.truth_time is not None and self.mirror.has_fallen()
 
     def report(self) -> dict[str, Any]:
-        return {**super().report(), "robot_process": self.robot_process.stop() if self._closed else {"pid": self.robot_process.pid}}
+        """The host's counters; once closed, the robot process's too, with its audit of every command it took (`wire`)."""
+        robot = dict(self.robot_process.stop()) if self._closed else {"pid": self.robot_process.pid}
+        wire = robot.pop("wire", None)
+        return {**super().report(), "domain": self.domain.domain, "robot_process": robot} | ({"wire": wire} if wire is not None else {})
 
     _closed = False
 
@@ -220,3 +231,4 @@ class SimulatedDdsBackend(DdsBackend):
         finally:
             self.robot_process.stop()
             self._truth_session.close()
+            self.domain.release()

@@ -203,7 +203,9 @@ def _backend(cfg: SimRunConfig, robot: SimRobot, duration: float | None) -> Back
         from controller.runtime.dds_backend import SimulatedDdsBackend  # noqa: PLC0415 - the g1 extra
 
         remote = ("--remote", cfg.scenario) if cfg.input == "unitree-remote" else ()  # the robot's remote plays the scenario
-        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir, remote)
+        faults = load_fault_file(cfg.faults).robot if cfg.faults is not None else ()
+        drills = tuple(arg for fault in faults for arg in ("--fault", fault))
+        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir, (*remote, *drills, "--joint-map", cfg.hardware))
     return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
 
 

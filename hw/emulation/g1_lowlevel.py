@@ -22,6 +22,7 @@ import numpy as np
 
 from hw import g1
 from hw.emulation.plant import Plant
+from hw.emulation.wire_audit import MotorState, WireAudit
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
 
@@ -52,9 +53,11 @@ class LowLevelCounters:
 class G1LowLevel:
     """One robot's low-level loop over a `Plant`; `receive` takes commands, `tick` applies them, `low_state` reports."""
 
-    def __init__(self, plant: Plant, cfg: LowLevelConfig = LowLevelConfig()) -> None:
+    def __init__(self, plant: Plant, cfg: LowLevelConfig = LowLevelConfig(), audit: WireAudit | None = None) -> None:
+        """`audit`: told every command taken and each joint's state per tick (what a drill is judged on)."""
         self.plant = plant
         self.cfg = cfg
+        self.audit = audit
         self.counters = LowLevelCounters()
         self.limp_reason: str | None = "no command yet"
         self._command: np.ndarray | None = None  # the last valid LowCmd_ record
@@ -76,6 +79,9 @@ class G1LowLevel:
         joints = record["motor_cmd"][: g1.NUM_JOINTS]
         if (joints["mode"] == hg.MOTOR_ENABLE).all() and not joints["kp"].any() and (joints["kd"] > 0).all():
             self.counters.damping_commands += 1
+        if self.audit is not None:
+            enabled = joints["mode"] == hg.MOTOR_ENABLE
+            self.audit.robot_command(now, joints["q"], joints["dq"], np.where(enabled, joints["kp"], 0.0), joints["tau"])
         self._command, self._last_valid, self.limp_reason = record, now, None
 
     def tick(self, now: float) -> None:
@@ -86,12 +92,15 @@ class G1LowLevel:
         with self.plant.lock:
             for i, joint in enumerate(g1.JOINT_NAMES):
                 slot = self._command["motor_cmd"][i] if self._command is not None else None
+                state: MotorState = "limp"
                 if slot is None or int(slot["mode"]) != hg.MOTOR_ENABLE:
                     self.plant.set_joint_command(joint, 0.0, 0.0, 0.0, 0.0, 0.0)
                 else:
-                    self.plant.set_joint_command(
-                        joint, float(slot["q"]), float(slot["dq"]), float(slot["kp"]), float(slot["kd"]), float(slot["tau"])
-                    )
+                    kp, kd = float(slot["kp"]), float(slot["kd"])
+                    self.plant.set_joint_command(joint, float(slot["q"]), float(slot["dq"]), kp, kd, float(slot["tau"]))
+                    state = "active" if kp > 0 else "damping" if kd > 0 else "limp"
+                if self.audit is not None:
+                    self.audit.motor_step(joint, now, state, None)
 
     def _go_limp(self, reason: str) -> None:
         self._command, self._last_valid, self.limp_reason = None, None, reason

@@ -54,16 +54,9 @@ class WireAudit:
             self._check(time, np.array([i]), *(np.array([v]) for v in command))
         self._set_state(i, time, state)
 
-    def robot_frame(self, time: float, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, kd: np.ndarray, tau: np.ndarray) -> None:
-        """A whole-robot command (a G1's `LowCmd_`), every joint at once."""
+    def robot_command(self, time: float, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> None:
+        """A whole-robot command (a G1's `LowCmd_`) as decoded, every joint at once; states follow per `motor_step`."""
         self._check(time, np.arange(len(self.names)), q, dq, kp, tau)
-        for i in range(len(self.names)):
-            self._set_state(i, time, "active" if kp[i] > 0 else ("damping" if kd[i] > 0 else "limp"))
-
-    def all_limp(self, time: float) -> None:
-        """The robot's firmware went limp on every joint (no command for too long)."""
-        for i in range(len(self.names)):
-            self._set_state(i, time, "limp")
 
     def _check(self, time: float, index: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> None:
         self.commands += len(index)
