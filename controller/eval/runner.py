@@ -106,8 +106,9 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
         "description": cfg.suite.description,
         "workers": cfg.workers,
         "address": cfg.address,
-        "wall_seconds": round(time.perf_counter() - t0, 3),
+        "wall_seconds": round(time.perf_counter() - t0 + _earlier_wall_seconds(cfg.report, len(every) - len(todo)), 3),
         "episodes_run": len(todo),
+        "episodes_resumed": len(every) - len(todo),
         "conditions": conditions,
         "push_curves": push_curves(conditions),
         "episodes": results,
@@ -147,6 +148,16 @@ def safety_failures(conditions: dict[str, dict[str, Any]]) -> list[str]:
         if figures.get("outside_limits"):
             failures.append(f"{group}: {figures['outside_limits']} commands outside the joint limits reached the motors")
     return failures
+
+
+def _earlier_wall_seconds(report: Path | None, resumed: int) -> float:
+    """A resumed sweep's wall time includes the earlier calls' (as their report gave it; 0 when it was never written)."""
+    if report is None or resumed == 0 or not report.is_file():
+        return 0.0
+    try:
+        return float(json.loads(report.read_text()).get("wall_seconds", 0.0))
+    except (ValueError, TypeError):
+        return 0.0
 
 
 def _read_journal(path: Path) -> dict[str, dict[str, Any]]:

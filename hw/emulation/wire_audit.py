@@ -68,7 +68,7 @@ class WireAudit:
                 self.examples.append(WireViolation(round(time, 4), joint, float(q[k]), float(dq[k]), float(tau[k])))
 
     def _set_state(self, i: int, time: float, state: MotorState) -> None:
-        self.last_time = time
+        self.last_time = time if self.last_time is None else max(self.last_time, time)
         was_safe = self.state[i] in SAFE
         self.state[i] = state
         if state in SAFE:

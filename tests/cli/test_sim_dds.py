@@ -32,3 +32,17 @@ def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_co
     assert hw["cycles"] > 2000 and hw["states_received"] > 2000 and hw["crc_errors"] == 0 and hw["faults"] == 0
     assert robot["commands"] > 2000 and robot["crc_errors"] == 0 and robot["mode_machine_mismatches"] == 0
     assert robot["damping_commands"] >= 1  # the host damped the robot on its way out (keep-last-1: it may see one of three)
+    assert hw["wire"]["outside_limits"] == 0 and hw["wire"]["commands"] == 29 * robot["commands"]  # the robot audited each one
+
+
+def test_a_drill_on_the_robot_in_its_own_process_is_judged_on_what_it_took(tmp_path: Path, sim_dds_config: Callable[[int], Path]) -> None:
+    report_path = tmp_path / "report.json"
+    hardware = str(sim_dds_config(1))
+    result = g1ctl("sim", "--duration", "3.5", "--hardware", hardware, "--faults", "dds-stale", "--report", str(report_path))
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "drill dds-stale: passed (every motor safe" in result.stdout
+    drill = json.loads(report_path.read_text())["drill"]
+    assert drill["fault_at_s"] == 3.0 and 0.05 <= drill["damping_latency_s"] <= 0.1 and drill["outside_limits"] == 0
+    assert any(f.startswith("robot state stale") for f in drill["faults"])
+    refused = g1ctl("sim", "--hardware", hardware, "--faults", "overheat-left-knee")
+    assert refused.returncode == 2 and "a DDS config has no buses to fault" in refused.stderr

@@ -51,6 +51,7 @@ def test_a_sweep_reports_per_condition_resumes_and_names_a_missed_criterion(tmp_
     ]
     again = run_suite(EvalConfig(TINY, "tiny", report=report_path))  # nothing left to do: the journal has both
     assert again["episodes_run"] == 0 and again["episodes"] == report["episodes"]
+    assert again["episodes_resumed"] == 2 and again["wall_seconds"] >= report["wall_seconds"]  # the first call's time is kept
 
 
 @pytest.mark.slow  # starts a local Ray instance
@@ -94,3 +95,33 @@ def test_two_runs_disagree_only_outside_each_others_interval() -> None:
     first = {"a": figures(1.0, 0.51, 1.0), "b": figures(1.0, 0.51, 1.0), "c": figures(0.5, 0.15, 0.85)}
     second = {"a": figures(0.75, 0.3, 0.95), "b": figures(0.0, 0.0, 0.49), "c": figures(0.5, 0.15, 0.85)}
     assert [line.split(":")[0] for line in disagreements(first, second)] == ["b"]  # type: ignore[arg-type]
+
+
+def test_the_faults_suite_drills_every_shipped_plan_on_the_hardware_it_names() -> None:
+    from hw.emulation.faults import available_fault_plans
+
+    every = episodes(load_suite("faults"))
+    assert sorted(e.condition for e in every) == available_fault_plans() and len(every) >= 15
+    hardware = {e.condition: e.hardware for e in every}
+    assert hardware["overheat-left-knee"] == "sim-can" and hardware["rs485-crc"] == "sim-mixed" and hardware["dds-stale"] == "sim-dds"
+    assert all(e.faults is not None and e.id.endswith(f"/{e.condition}/seed0") for e in every)
+    with pytest.raises(ConfigError, match="lossy-can is both a perturbation label and a fault plan"):
+        episodes(SuiteConfig(name="x", duration_s=1.0, perturbations={"lossy-can": {}}, faults=("lossy-can",)))
+    with pytest.raises(ConfigError, match="the suite has no episodes"):
+        episodes(SuiteConfig(name="x", duration_s=1.0, perturbations={}))
+
+
+def test_drills_pass_and_a_drill_that_misses_its_stated_time_is_named(tmp_path: Path) -> None:
+    impatient = tmp_path / "impatient-imu.yaml"  # the IMU times out after 50 ms: 10 ms cannot be met
+    impatient.write_text("buses:\n  imu: {silent: true, start_s: 3.0}\nexpect: {outcome: damping, within_s: 0.01, names: IMU}\n")
+    suite = SuiteConfig(
+        name="drills", duration_s=3.5, perturbations={}, faults=("overheat-left-knee", "wild-command", str(impatient)), seeds=1
+    )
+    report = run_suite(EvalConfig(suite, "drills"))
+    conditions = report["conditions"]
+    knee = conditions["walk_turn_stop/fastsac/direct/sim-can/overheat-left-knee"]
+    assert knee["drills_passed"] == 1 and knee["damping_latency_max_s"] <= 0.02 and knee["outside_limits"] == 0
+    assert conditions["walk_turn_stop/fastsac/direct/sim-can/wild-command"]["drills_passed"] == 1
+    (failure,) = report["criteria_failures"]
+    assert failure.startswith("walk_turn_stop/fastsac/direct/sim-can/impatient-imu: drill failed: seed 0: every motor safe")
+    assert "more than the 10 ms stated" in failure

@@ -1,0 +1,163 @@
+"""Fault drills: plans strike at their time, the wire audit sees what the motors decoded, and the judge
+says whether the stack did what the plan expects."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hw import g1
+from hw.dds.domains import claim_domain
+from hw.emulation.drill import judge_drill
+from hw.emulation.faults import FaultFile, FaultSpec, available_fault_plans, check_plan_fits, load_fault_file
+from hw.emulation.g1_lowlevel import G1LowLevel, LowLevelConfig
+from hw.emulation.plant import StaticPlant
+from hw.emulation.wire_audit import WireAudit
+from hw.errors import ConfigError
+from hw.jointmap import HardwareConfig, load_hardware_config, load_robot_config
+from hw.protocols import unitree_hg as hg
+from hw.safety import JointLimits, outside_limits
+from hw.types import JointCommand
+from tests.hw.test_hardware_robot import activate, rig, run_cycles
+
+KNEE = g1.JOINT_NAMES.index("left_knee_joint")
+
+
+def limits() -> JointLimits:
+    cfg = load_hardware_config("sim-can")
+    return JointLimits.from_joint_map(g1.JOINT_NAMES, cfg.joints)
+
+
+def test_outside_limits_allows_one_quantization_step_and_ignores_positions_without_stiffness() -> None:
+    lim = limits()
+    i = np.array([KNEE, KNEE, KNEE, KNEE, KNEE])
+    hi = lim.q_max[KNEE]
+    q = np.array([hi + 5e-4, hi + 0.01, hi + 0.01, 0.5, np.nan])
+    kp = np.array([40.0, 40.0, 0.0, 40.0, 40.0])  # the third is a damping command: its position means nothing
+    tau = np.array([0.0, 0.0, 0.0, 1.5 * lim.tau_max[KNEE], 0.0])
+    assert outside_limits(lim, i, q, np.zeros(5), kp, tau).tolist() == [False, True, False, True, True]
+
+
+def test_the_audit_counts_what_left_the_limits_and_when_every_motor_became_safe() -> None:
+    audit = WireAudit(g1.JOINT_NAMES, limits())
+    for t in (0.0, 0.002):
+        for name in g1.JOINT_NAMES:
+            audit.motor_step(name, t, "active", (0.1, 0.0, 40.0, 0.0))
+    audit.motor_step("left_knee_joint", 0.004, "active", (5.0, 0.0, 40.0, 0.0))  # past the knee's 2.88 rad
+    assert audit.safe_since() is None
+    for i, name in enumerate(g1.JOINT_NAMES):
+        audit.motor_step(name, 0.006 + 0.002 * (i == KNEE), "limp" if i == KNEE else "damping", None)
+    report = audit.report()
+    assert report["outside_limits"] == 1 and report["outside_examples"][0]["joint"] == "left_knee_joint"
+    assert report["safe_since"] == 0.008 and report["limp_joints"] == ["left_knee_joint"] and report["observed_until"] == 0.008
+    audit.motor_step("left_knee_joint", 0.01, "active", None)  # back to holding: not safe any more
+    assert audit.safe_since() is None
+
+
+def test_a_plan_holds_its_faults_back_until_their_time() -> None:
+    plan = FaultSpec(over_temperature=(4,), drop_reply_prob=1.0, start_s=2.0, seed=7).plan()
+    assert plan.over_temperature == set() and not plan.drop()
+    plan.update(1.999)
+    assert plan.over_temperature == set()
+    plan.update(2.0)
+    assert plan.over_temperature == {4} and plan.drop() and plan.pending is None
+    assert not FaultSpec(seed=3).starts_fault and FaultSpec(bus_off=True, start_s=1.0).starts_fault
+
+
+def test_every_shipped_plan_loads_fits_its_hardware_and_strikes_at_a_stated_time() -> None:
+    for name in available_fault_plans():
+        plan = load_fault_file(name)
+        hardware = load_robot_config(plan.hardware)
+        check_plan_fits(plan, name, dds=not isinstance(hardware, HardwareConfig))
+        if isinstance(hardware, HardwareConfig):
+            assert set(plan.buses) <= set(hardware.buses), name
+        assert plan.expect.outcome == "ride-through" or plan.start_s == 3.0, name
+    with pytest.raises(ConfigError, match="'robot:' faults are for a simulated G1 over DDS"):
+        check_plan_fits(load_fault_file("dds-stale"), "dds-stale", dds=False)
+    with pytest.raises(ConfigError, match="robot fault 'melt@3' must be KIND@SECONDS"):
+        FaultFile(robot=("melt@3",))
+    with pytest.raises(ConfigError, match="unknown fault plan 'nope'"):
+        load_fault_file("nope")
+
+
+def wire(safe_since: float | None, outside: int = 0, until: float = 5.0) -> dict[str, object]:
+    return {"outside_limits": outside, "safe_since": safe_since, "observed_until": until, "limp_joints": []}
+
+
+def test_the_judge_names_every_way_a_drill_fails() -> None:
+    plan = load_fault_file("overheat-left-knee")
+    hw = {"wire": wire(3.004), "fault_reasons": ["left_knee_joint: over-temperature 119 C"]}
+    verdict = judge_drill(plan, "p", hw, fell=True)
+    assert verdict["passed"] and verdict["damping_latency_s"] == 0.004
+    late = judge_drill(plan, "p", hw | {"wire": wire(3.05, outside=2)}, fell=False)
+    assert late["failures"] == [
+        "2 commands outside the joint limits reached the motors",
+        "every motor safe 50 ms after the fault, more than the 20 ms stated",
+    ]
+    assert judge_drill(plan, "p", hw | {"wire": wire(None)}, fell=False)["failures"] == ["not every motor ended damped or limp"]
+    assert "already safe" in judge_drill(plan, "p", hw | {"wire": wire(2.5)}, fell=False)["failures"][0]
+    assert "no latched fault names 'left_knee_joint'" in judge_drill(plan, "p", {"wire": wire(3.004)}, fell=False)["failures"][0]
+    assert "run it longer" in judge_drill(plan, "p", hw | {"wire": wire(1.0, until=1.0)}, fell=False)["failures"][0]
+    assert judge_drill(plan, "p", {}, fell=False)["failures"][0] == "no audit of the frames the motors decoded"
+    lossy = load_fault_file("lossy-can")
+    assert judge_drill(lossy, "l", {"wire": wire(None)}, fell=False)["passed"]
+    assert judge_drill(lossy, "l", {"wire": wire(None), "fault_reasons": ["x"]}, fell=True)["failures"] == [
+        "a fault latched: x",
+        "the robot fell",
+    ]
+    wild = load_fault_file("wild-command")
+    assert judge_drill(wild, "w", {"wire": wire(None), "clamped_values": 0}, fell=True)["failures"] == ["the safety layer clamped nothing"]
+
+
+def test_a_host_with_a_wrong_joint_map_is_caught_on_the_wire(g1_model) -> None:
+    """The host believes the knee goes to 10 rad; the motors' joint map says 2.88: the audit sees the difference."""
+
+    def loose_knee(cfg: HardwareConfig) -> HardwareConfig:
+        joints = dict(cfg.joints)
+        joints["left_knee_joint"] = dataclasses.replace(joints["left_knee_joint"], position_limits=(-0.1, 10.0))
+        return dataclasses.replace(cfg, joints=joints)
+
+    with rig(g1_model, host_cfg=loose_knee) as (host, twin, _plant):
+        activate(host, twin)
+        n = g1.NUM_JOINTS
+        q = host.default_pose.copy()
+        q[KNEE] = 3.5
+        host.write(JointCommand(q=q, dq=np.zeros(n), kp=np.full(n, 40.0), kd=np.ones(n), tau_ff=np.zeros(n)))
+        run_cycles(host, twin, 10)  # 0.3 rad a cycle: the knee target passes 2.88 rad on the way
+        report = twin.audit.report()
+        assert report["outside_limits"] >= 1 and {v["joint"] for v in report["outside_examples"]} == {"left_knee_joint"}
+        assert report["commands"] >= 29 * 10
+
+
+def test_the_g1_main_board_audits_every_command_it_takes() -> None:
+    plant = StaticPlant(dict.fromkeys(g1.JOINT_NAMES, 0.0))
+    cfg = load_robot_config("sim-dds")
+    audit = WireAudit(g1.JOINT_NAMES, JointLimits.from_joint_map(g1.JOINT_NAMES, cfg.joints))
+    lowlevel = G1LowLevel(plant, LowLevelConfig(mode_machine=5), audit)
+    record = hg.new_low_cmd(mode_machine=5)
+    for i in range(g1.NUM_JOINTS):
+        record["motor_cmd"][i]["mode"], record["motor_cmd"][i]["kp"], record["motor_cmd"][i]["kd"] = 1, 40.0, 1.0
+    record["motor_cmd"][KNEE]["q"] = 3.5  # past the knee
+    lowlevel.receive(hg.with_crc(record), 0.0)
+    lowlevel.tick(0.0)
+    assert audit.outside == 1 and audit.safe_since() is None
+    damping = hg.new_low_cmd(mode_machine=5)
+    for i in range(g1.NUM_JOINTS):
+        damping["motor_cmd"][i]["mode"], damping["motor_cmd"][i]["kd"], damping["motor_cmd"][i]["q"] = 1, 2.0, 9.0  # q ignored
+    lowlevel.receive(hg.with_crc(damping), 0.002)
+    lowlevel.tick(0.002)
+    assert audit.outside == 1 and audit.safe_since() == 0.002 and set(audit.state) == {"damping"}
+
+
+def test_simulated_dds_runs_claim_domains_of_their_own(tmp_path: Path) -> None:
+    first = claim_domain(7, tmp_path)
+    second = claim_domain(7, tmp_path)
+    assert (first.domain, second.domain) == (7, 100)
+    first.release()
+    third = claim_domain(7, tmp_path)
+    assert third.domain == 7
+    second.release()
+    third.release()
