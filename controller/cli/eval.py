@@ -14,6 +14,12 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from hw.errors import ConfigError
+
+if TYPE_CHECKING:
+    from controller.eval.suite import SuiteConfig
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -25,6 +31,26 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     ev.add_argument("--progress", action="store_true", help="a progress bar on stderr")
     ev.add_argument("--against", type=Path, default=None, help="an earlier report (other seeds): name the conditions that do not hold")
     ev.add_argument("--first-seed", type=int, default=None, help="run the suite's episodes from this seed on (a re-run with other seeds)")
+    ev.add_argument("--seeds", type=int, default=None, help="seeds per condition instead of the suite's")
+    ev.add_argument(
+        "--hardware", default=None, metavar="CONFIG",
+        help="run the suite's perturbed episodes through this simulated hardware (e.g. sim-can) instead of the suite's",
+    )  # fmt: skip
+
+
+def with_hardware(suite: SuiteConfig, hardware: str) -> SuiteConfig:
+    """The suite through other simulated hardware; refused in one line for a real robot's config or one that cannot be perturbed."""
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
+
+    cfg = load_robot_config(hardware)
+    if isinstance(cfg, DdsHardwareConfig):
+        raise ConfigError(
+            f"--hardware {hardware}: perturbations need the physics in this process: give simulated buses (sim-can, sim-mixed)"
+        )
+    if not cfg.simulated:
+        raise ConfigError(f"--hardware {hardware} is a real robot's config: an evaluation runs on simulated hardware")
+    return dataclasses.replace(suite, hardware=(hardware,))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,6 +60,10 @@ def run(args: argparse.Namespace) -> int:
     suite = load_suite(args.suite)
     if args.first_seed is not None:
         suite = dataclasses.replace(suite, first_seed=args.first_seed)
+    if args.seeds is not None:
+        suite = dataclasses.replace(suite, seeds=args.seeds)
+    if args.hardware is not None:
+        suite = with_hardware(suite, args.hardware)
     report = run_suite(EvalConfig(suite, args.suite, args.workers, args.address, args.report, args.progress, args.assets_dir))
     for group, figures in report["conditions"].items():
         keys: tuple[str, ...] = ("episodes", "falls", "survival", "survival_ci95", "velocity_error_mean", "outside_limits")

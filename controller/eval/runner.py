@@ -61,6 +61,7 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
         "velocity_error_mean": report["velocity_error_mean"],
         "final_mode": report["final_mode"],
         "damp_reason": report["damp_reason"],
+        "ended_in_fault": report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"),  # not survived
         "push_impulse_ns": report.get("push_impulse_ns", 0.0),
         "pushes_only": dataclasses.replace(episode.perturbations, pushes=None) == Perturbations(),  # on the push curve
         "pushes": len(report.get("pushes", [])),

@@ -20,14 +20,15 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
 
 
 def summarize(results: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Per condition (`group`): episodes, falls, survival and its 95 % interval, mean velocity error, failed episodes."""
+    """Per condition (`group`): episodes, falls, faults, survival and its 95 % interval, mean velocity error, failed episodes;
+    with simulated hardware, commands outside the limits on the wire; for drills, how many passed and the slowest damping."""
     groups: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in results:
         groups[r["group"]].append(r)
     summary = {}
     for group, rs in sorted(groups.items()):
         done = [r for r in rs if r["status"] == "done"]
-        survived = sum(r["falls"] == 0 for r in done)
+        survived = sum(r["falls"] == 0 and not r.get("ended_in_fault", False) for r in done)  # a robot damped by a fault is down too
         low, high = wilson_interval(survived, len(done))
         errors = [r["velocity_error_mean"] for r in done if r["velocity_error_mean"] == r["velocity_error_mean"]]
         summary[group] = {
@@ -35,6 +36,7 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "episodes": len(done),
             "failed_episodes": len(rs) - len(done),
             "falls": sum(r["falls"] for r in done),
+            "faults": sum(bool(r.get("ended_in_fault")) for r in done),
             "survival": round(survived / len(done), 4) if done else None,
             "survival_ci95": [round(low, 4), round(high, 4)],
             "velocity_error_mean": round(sum(errors) / len(errors), 4) if errors else None,
