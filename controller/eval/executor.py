@@ -55,15 +55,24 @@ class Executor:
             self._ray.shutdown()
             self._started = False
 
-    def map_unordered(self, fn: Callable[..., Any], items: Sequence[tuple[Any, ...]]) -> Iterator[tuple[int, Any]]:
-        """`fn(*item)` for every item; `(index, result)` as each finishes (in order in this process)."""
+    def map_unordered(
+        self, fn: Callable[..., Any], items: Sequence[tuple[Any, ...]], cpus: Sequence[int] | None = None
+    ) -> Iterator[tuple[int, Any]]:
+        """`fn(*item)` for every item; `(index, result)` as each finishes (in order in this process).
+
+        `cpus`: CPUs each task holds while it runs (default 1; on a local instance at most `workers`).
+        """
         if self.in_process:
             for index, item in enumerate(items):
                 yield index, fn(*item)
             return
         ray = self._ray
         task = ray.remote(num_cpus=1, max_retries=1)(fn)
-        pending = {task.remote(*item): index for index, item in enumerate(items)}
+        needs = [min(c, self.workers) if self.address is None else c for c in (cpus or [1] * len(items))]
+        pending = {
+            (task.options(num_cpus=n) if n != 1 else task).remote(*item): index
+            for index, (item, n) in enumerate(zip(items, needs, strict=True))
+        }
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             for ref in ready:

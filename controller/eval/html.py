@@ -43,18 +43,37 @@ def write_html(report: dict[str, Any], path: Path) -> None:
     if curves:
         plot = f'<img alt="survival over impulse" src="{_curve_plot(curves)}">'
         pushes = f"<h2>Pushes</h2><p>Largest impulse survived by 90 % of episodes:</p><ul>{impulse}</ul>{plot}"
+    drills = _drill_table(conditions)
     problems = [*report["criteria_failures"], *(f"{e['id']}: {e.get('error', '')}" for e in report["episodes"] if e["status"] != "done")]
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(report["suite"])}</title><style>{STYLE}</style></head>
 <body><h1>Robustness: {html.escape(report["suite"])}</h1><p>{html.escape(report.get("description", ""))}</p>
 <p>{len(report["episodes"])} episodes, {report["workers"]} workers, {report["wall_seconds"]} s.</p>
 <table><tr>{head}</tr>{"".join(rows)}</table>
 <h2>Survival per condition</h2><img alt="survival per condition" src="{_survival_plot(conditions)}">
-{pushes}
+{pushes}{drills}
 <h2>Criteria missed and episodes lost</h2><ul>{"".join(f"<li>{html.escape(p)}</li>" for p in problems) or "<li>none</li>"}</ul>
 </body></html>
 """
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page)
+
+
+def _drill_table(conditions: dict[str, dict[str, Any]]) -> str:
+    """Per drill: passed of run, the slowest time to every motor safe against the plan's, commands outside the limits on the wire."""
+    rows = []
+    for group, f in conditions.items():
+        if not f.get("drills"):
+            continue
+        css = "good" if f["drills_passed"] == f["drills"] and not f.get("outside_limits") else "bad"
+        latency, stated = f.get("damping_latency_max_s"), f.get("within_s")
+        cells = [html.escape(group), f"{f['drills_passed']} of {f['drills']}", "-" if latency is None else f"{1e3 * latency:.0f}",
+                 "-" if stated is None else f"{1e3 * stated:.0f}", f.get("outside_limits", "-")]  # fmt: skip
+        rows.append(f'<tr class="{css}">' + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    if not rows:
+        return ""
+    head = "".join(f"<th>{h}</th>" for h in ("drill", "passed", "every motor safe after (ms)", "stated (ms)", "outside limits on the wire"))
+    intro = "<h2>Fault drills</h2><p>Judged on what the emulated motors decoded from the frames.</p>"
+    return f"{intro}<table><tr>{head}</tr>{''.join(rows)}</table>"
 
 
 def _figure(width: float, height: float) -> tuple[Figure, Any]:

@@ -38,6 +38,17 @@ class EvalConfig:
     assets_dir: str | None = None
 
 
+def episode_cpus(hardware: str) -> int:
+    """CPUs an episode holds: two when its robot runs in a process of its own on the wall clock (a simulated G1 over
+    DDS), so that the host and the robot each have one; a starved robot goes quiet for 50 ms and the host rightly damps."""
+    if hardware == "none":
+        return 1
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
+
+    return 2 if isinstance(load_robot_config(hardware), DdsHardwareConfig) else 1
+
+
 def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, Any]:
     """One episode on the simulator; any exception is the episode's failure, reported, not raised."""
     from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
@@ -94,7 +105,8 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
             bar.update(1)
 
         with Executor(cfg.workers, cfg.address) as executor:
-            for index, result in executor.map_unordered(run_episode, [(e, cfg.assets_dir) for e in todo]):
+            cpus = [episode_cpus(e.hardware) for e in todo]
+            for index, result in executor.map_unordered(run_episode, [(e, cfg.assets_dir) for e in todo], cpus):
                 if isinstance(result, TaskLost):  # the worker died twice: the episode is lost, and says so
                     episode = todo[index]
                     base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}

@@ -117,7 +117,8 @@ def test_drills_pass_and_a_drill_that_misses_its_stated_time_is_named(tmp_path: 
     suite = SuiteConfig(
         name="drills", duration_s=3.5, perturbations={}, faults=("overheat-left-knee", "wild-command", str(impatient)), seeds=1
     )
-    report = run_suite(EvalConfig(suite, "drills"))
+    report = run_suite(EvalConfig(suite, "drills", report=tmp_path / "drills.json"))
+    assert "<h2>Fault drills</h2>" in (tmp_path / "drills.html").read_text()
     conditions = report["conditions"]
     knee = conditions["walk_turn_stop/fastsac/direct/sim-can/overheat-left-knee"]
     assert knee["drills_passed"] == 1 and knee["damping_latency_max_s"] <= 0.02 and knee["outside_limits"] == 0
@@ -125,3 +126,9 @@ def test_drills_pass_and_a_drill_that_misses_its_stated_time_is_named(tmp_path: 
     (failure,) = report["criteria_failures"]
     assert failure.startswith("walk_turn_stop/fastsac/direct/sim-can/impatient-imu: drill failed: seed 0: every motor safe")
     assert "more than the 10 ms stated" in failure
+
+
+def test_an_episode_with_its_robot_in_another_process_holds_two_cpus() -> None:
+    from controller.eval.runner import episode_cpus
+
+    assert (episode_cpus("none"), episode_cpus("sim-can"), episode_cpus("sim-dds")) == (1, 1, 2)
