@@ -10,14 +10,20 @@
   again), whole control ticks of latency between the observation and the command, and the
   PD gains scaled (the other half of motor strength).
 
-The same seed gives the same perturbations: every random draw comes from one generator per run.
+Any value of a perturbation set may be a range `[low, high]` instead (`draw_perturbations`): each
+run draws it from its seed (whole numbers for whole-number fields), so a condition can randomize
+rather than fix a level. The same seed gives the same perturbations: every random draw comes
+from one generator per run, the ranges from one of their own.
 """
 
 from __future__ import annotations
 
 import collections
+import dataclasses
 import math
+import typing
 from dataclasses import dataclass, replace
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -172,7 +178,54 @@ class PerturbedRobot(RobotInterface):
         self.robot.damp()
 
 
-def load_perturbations(name_or_path: str) -> Perturbations:
-    """A shipped perturbation set by name (`configs/perturbations/`) or a YAML file; mistakes name the file and key."""
+RANGE_STREAM = 0x5EED  # the ranges' generator: (seed, this), apart from the run's own draws
+
+
+def has_ranges(values: Any) -> bool:
+    """Whether a perturbation set's values (a YAML mapping) hold a `[low, high]` range anywhere."""
+    if not isinstance(values, dict):
+        return False
+    return any(_is_range(v) or has_ranges(v) for v in values.values())
+
+
+def draw_perturbations(values: Any, seed: int, source: str, key: str = "") -> Perturbations:
+    """The perturbations of one run: every `[low, high]` in `values` drawn from `seed`; mistakes name the file and key."""
+    rng = np.random.default_rng([seed, RANGE_STREAM])
+    return from_dict(Perturbations, _draw(Perturbations, values or {}, rng, source, key), source, key)
+
+
+def _is_range(value: Any) -> bool:
+    return isinstance(value, list) and len(value) == 2 and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+
+
+def _draw(cls: type, values: Any, rng: np.random.Generator, source: str, key: str) -> Any:
+    if not isinstance(values, dict):
+        return values  # from_dict says what is wrong with it
+    hints = typing.get_type_hints(cls)
+    drawn = {}
+    for name, value in values.items():
+        where = f"{key}.{name}" if key else name
+        nested = [t for t in typing.get_args(hints.get(name)) if isinstance(t, type) and dataclasses.is_dataclass(t)]
+        if nested and isinstance(value, dict):
+            drawn[name] = _draw(nested[0], value, rng, source, where)
+        elif _is_range(value):
+            low, high = value
+            if low > high:
+                raise ConfigError(f"{source}: {where}: a range is [low, high] with low <= high, got {value}")
+            whole = hints.get(name) is int
+            drawn[name] = int(rng.integers(low, high + 1)) if whole else float(rng.uniform(low, high))
+        else:
+            drawn[name] = value
+    return drawn
+
+
+def load_perturbations(name_or_path: str, seed: int = 0) -> Perturbations:
+    """A shipped perturbation set by name (`configs/perturbations/`) or a YAML file, its ranges drawn from `seed`;
+    mistakes name the file and key."""
     path = resolve_preset(name_or_path, config_dir("perturbations"), "perturbation set")
-    return from_dict(Perturbations, load_yaml(path), str(path))
+    return draw_perturbations(load_yaml(path), seed, str(path))
+
+
+def perturbation_values(name_or_path: str) -> Any:
+    """A perturbation set's YAML values as written (ranges undrawn)."""
+    return load_yaml(resolve_preset(name_or_path, config_dir("perturbations"), "perturbation set"))

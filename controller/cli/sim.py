@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
-        status=args.status, perturbations=load_perturbations(args.perturb) if args.perturb else None,
+        status=args.status, perturbations=load_perturbations(args.perturb, args.seed) if args.perturb else None,
     )  # fmt: skip
     return run_and_summarize(cfg)
 

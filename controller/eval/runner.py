@@ -74,8 +74,10 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
         "damp_reason": report["damp_reason"],
         "ended_in_fault": report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"),  # not survived
         "push_impulse_ns": report.get("push_impulse_ns", 0.0),
-        "pushes_only": dataclasses.replace(episode.perturbations, pushes=None) == Perturbations(),  # on the push curve
+        # On the push curve: a condition that only pushes, at one impulse (not drawn from a range).
+        "pushes_only": not episode.randomized and dataclasses.replace(episode.perturbations, pushes=None) == Perturbations(),
         "pushes": len(report.get("pushes", [])),
+        "perturbations": dataclasses.asdict(episode.perturbations) if episode.randomized else None,  # as drawn
         "outside_limits": report["hw"]["wire"]["outside_limits"] if "wire" in report.get("hw", {}) else None,  # on the wire
         "drill": _drill_summary(report["drill"]) if "drill" in report else None,
         "episode_seconds": round(time.perf_counter() - t0, 3),

@@ -1,7 +1,8 @@
 """An evaluation suite (YAML) and the episodes it crosses into.
 
 A suite names what varies: scenarios, policies, whether the planner is in the loop, hardware
-configs, perturbation conditions (a shipped set by name, or inline values), fault drills (plans
+configs, perturbation conditions (a shipped set by name, or inline values, any of them a range
+drawn per episode from its seed), fault drills (plans
 of `configs/faults/`, each on the simulated hardware it is written for) and seeds; pass
 criteria may hold per condition, and every drill carries its own (what the plan expects). Every
 combination is an `Episode` with a stable id, so a report lists each episode's seed and result
@@ -19,7 +20,7 @@ from hw.emulation.faults import available_fault_plans, load_fault_file
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_yaml, preset_names, resolve_preset
-from sim.perturbations import Perturbations, load_perturbations
+from sim.perturbations import Perturbations, draw_perturbations, has_ranges, perturbation_values
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,7 @@ class Episode:
     seed: int
     duration_s: float
     faults: str | None = None  # a fault plan: this episode is a drill
+    randomized: bool = False  # the condition gives ranges: `perturbations` were drawn from this episode's seed
 
     @property
     def group(self) -> str:
@@ -81,10 +83,22 @@ def load_suite(name_or_path: str) -> SuiteConfig:
     return cfg
 
 
-def _perturbations(label: str, value: Any, source: str) -> Perturbations:
-    if isinstance(value, str):
-        return load_perturbations(value)
-    return from_dict(Perturbations, value or {}, source, f"perturbations.{label}")
+@dataclass(frozen=True)
+class _Condition:
+    """A perturbation condition as written (ranges undrawn), and where a mistake in it is."""
+
+    values: Any
+    source: str
+    key: str
+
+    @staticmethod
+    def of(label: str, value: Any, source: str) -> _Condition:
+        if isinstance(value, str):
+            return _Condition(perturbation_values(value), str(resolve_preset(value, config_dir("perturbations"), "perturbation set")), "")
+        return _Condition(value or {}, source, f"perturbations.{label}")
+
+    def draw(self, seed: int) -> Perturbations:
+        return draw_perturbations(self.values, seed, self.source, self.key)
 
 
 def fault_plans(cfg: SuiteConfig) -> dict[str, tuple[str, str]]:
@@ -100,7 +114,7 @@ def fault_plans(cfg: SuiteConfig) -> dict[str, tuple[str, str]]:
 
 def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
     """Every combination, seeds innermost, in a fixed order: the perturbed conditions, then the drills."""
-    conditions = {label: _perturbations(label, value, source) for label, value in cfg.perturbations.items()}
+    conditions = {label: _Condition.of(label, value, source) for label, value in cfg.perturbations.items()}
     drills = fault_plans(cfg)
     clash = sorted(set(conditions) & set(drills))
     if clash:
@@ -110,8 +124,11 @@ def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
         known = ", ".join([*conditions, *drills])
         raise ConfigError(f"{source}: criteria for unknown conditions: {', '.join(unknown)} (conditions: {known})")
     seeds = range(cfg.first_seed, cfg.first_seed + cfg.seeds)
+    randomized = {label: has_ranges(condition.values) for label, condition in conditions.items()}
     perturbed = [
-        Episode(scenario, policy, planner, hardware, label, conditions[label], seed, cfg.duration_s)
+        Episode(
+            scenario, policy, planner, hardware, label, conditions[label].draw(seed), seed, cfg.duration_s, randomized=randomized[label]
+        )
         for scenario, policy, planner, hardware, label, seed in itertools.product(
             cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, seeds
         )

@@ -80,6 +80,35 @@ def test_shipped_sets_load_and_mistakes_are_one_line(tmp_path: Path) -> None:
         load_perturbations(str(bad))
 
 
+def test_ranges_are_drawn_from_the_seed_whole_numbers_for_whole_number_fields() -> None:
+    from sim.perturbations import draw_perturbations, has_ranges
+
+    values = {"friction_scale": [0.4, 1.0], "latency_ticks": [0, 3], "pushes": {"force_n": [100, 400]}, "payload_kg": 5.0}
+    assert has_ranges(values) and not has_ranges({"pushes": {"force_n": 100.0}})
+    draws = [draw_perturbations(values, seed, "test") for seed in range(40)]
+    assert draws[7] == draw_perturbations(values, 7, "test") and len({d.friction_scale for d in draws}) == 40
+    assert all(0.4 <= d.friction_scale <= 1.0 and 100 <= d.pushes.force_n <= 400 and d.payload_kg == 5.0 for d in draws)  # type: ignore[union-attr]
+    assert {d.latency_ticks for d in draws} == {0, 1, 2, 3} and all(isinstance(d.latency_ticks, int) for d in draws)
+    with pytest.raises(ConfigError, match=r"test: pushes.force_n: a range is \[low, high\] with low <= high"):
+        draw_perturbations({"pushes": {"force_n": [400, 100]}}, 0, "test")
+    with pytest.raises(ConfigError, match="drop_rate"):
+        draw_perturbations({"drop_rate": [1.2, 1.5]}, 3, "test")  # a draw out of range is refused like a value
+
+
+def test_a_suite_condition_with_ranges_draws_per_episode_and_stays_off_the_push_curve() -> None:
+    from controller.eval.suite import SuiteConfig, episodes
+
+    suite = SuiteConfig(
+        name="r", duration_s=1.0, perturbations={"fixed": {"friction_scale": 0.5}, "random": {"friction_scale": [0.3, 1.0]}}
+    )
+    every = episodes(suite)
+    fixed = [e for e in every if e.condition == "fixed"]
+    drawn = [e for e in every if e.condition == "random"]
+    assert {e.perturbations.friction_scale for e in fixed} == {0.5} and not any(e.randomized for e in fixed)
+    assert len({e.perturbations.friction_scale for e in drawn}) == 3 and all(e.randomized for e in drawn)
+    assert [e.perturbations for e in drawn] == [e.perturbations for e in episodes(suite) if e.condition == "random"]
+
+
 @pytest.mark.slow  # a run through the simulated CAN buses
 def test_perturbations_reach_a_run_through_simulated_hardware() -> None:
     shove = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.0), latency_ticks=1, joint_noise_rad=0.005)
