@@ -92,12 +92,18 @@ def push_curves(conditions: dict[str, dict[str, Any]], level: float = 0.9) -> di
 
 
 def disagreements(first: dict[str, dict[str, Any]], second: dict[str, dict[str, Any]]) -> list[str]:
-    """Conditions whose survival in a re-run (`second`, other seeds) lies outside the first run's 95 % interval."""
+    """Conditions where two runs (other seeds) disagree: neither run's survival lies within the other's 95 % interval.
+
+    Symmetric on purpose: a Wilson interval of a condition that saw one fall never reaches 1.00, so a re-run
+    that saw none would "leave" it however rare the falls are; each run must be out of the other's reach.
+    """
     lines = []
     for group in sorted(set(first) & set(second)):
         a, b = first[group], second[group]
         if a["survival"] is None or b["survival"] is None:
             continue
-        if not a["survival_ci95"][0] <= b["survival"] <= a["survival_ci95"][1]:
+        b_in_a = a["survival_ci95"][0] <= b["survival"] <= a["survival_ci95"][1]
+        a_in_b = b["survival_ci95"][0] <= a["survival"] <= b["survival_ci95"][1]
+        if not (b_in_a or a_in_b):
             lines.append(f"{group}: survival {a['survival']:.2f} {a['survival_ci95']} against {b['survival']:.2f} {b['survival_ci95']}")
     return lines

@@ -92,8 +92,9 @@ def test_two_runs_disagree_only_outside_each_others_interval() -> None:
     def figures(survival: float, low: float, high: float) -> dict[str, object]:
         return {"survival": survival, "survival_ci95": [low, high]}
 
-    first = {"a": figures(1.0, 0.51, 1.0), "b": figures(1.0, 0.51, 1.0), "c": figures(0.5, 0.15, 0.85)}
-    second = {"a": figures(0.75, 0.3, 0.95), "b": figures(0.0, 0.0, 0.49), "c": figures(0.5, 0.15, 0.85)}
+    first = {"a": figures(1.0, 0.51, 1.0), "b": figures(1.0, 0.51, 1.0), "c": figures(0.5, 0.15, 0.85), "d": figures(0.75, 0.3, 0.95)}
+    second = {"a": figures(0.75, 0.3, 0.95), "b": figures(0.0, 0.0, 0.49), "c": figures(0.5, 0.15, 0.85), "d": figures(1.0, 0.51, 1.0)}
+    # One fall against none, either way round, is within reach; all against none is not.
     assert [line.split(":")[0] for line in disagreements(first, second)] == ["b"]  # type: ignore[arg-type]
 
 
