@@ -51,26 +51,6 @@ def limit_command(cmd: JointCommand, limits: JointLimits, previous_q: FloatArray
     return JointCommand(q=q, dq=dq, kp=kp, kd=kd, tau_ff=tau), changed
 
 
-# The codecs quantize what they carry, so a command at a limit may decode a hair past it: a
-# position by under 1e-3 rad, a velocity or torque by under 1 % of its limit (12-bit MIT fields).
-WIRE_TOLERANCE_REL = 0.01
-WIRE_TOLERANCE_ABS = 1e-3
-
-
-def outside_limits(limits: JointLimits, index: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Per command (joints `index`, joint side, as decoded from the wire): True where it leaves the limits.
-
-    A position target counts only with stiffness (kp > 0): a damping command carries no position.
-    Not finite is outside.
-    """
-    lo, hi = limits.q_min[index] - WIRE_TOLERANCE_ABS, limits.q_max[index] + WIRE_TOLERANCE_ABS
-    dq_max = limits.dq_max[index] * (1 + WIRE_TOLERANCE_REL) + WIRE_TOLERANCE_ABS
-    tau_max = limits.tau_max[index] * (1 + WIRE_TOLERANCE_REL) + WIRE_TOLERANCE_ABS
-    with np.errstate(invalid="ignore"):
-        q_bad = (kp > 0) & ~((q >= lo) & (q <= hi))
-        return q_bad | ~(np.abs(dq) <= dq_max) | ~(np.abs(tau) <= tau_max) | ~np.isfinite(kp)
-
-
 def command_is_finite(cmd: JointCommand) -> bool:
     return bool(
         np.isfinite(cmd.q).all()

@@ -83,15 +83,14 @@ def _audit(joint_map: str) -> WireAudit:
     """The audit of every command taken, against the joint limits of a DDS hardware config (times: simulated seconds)."""
     from hw import g1  # noqa: PLC0415
     from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
-    from hw.emulation.wire_audit import WireAudit  # noqa: PLC0415
+    from hw.emulation.wire_audit import WireAudit, WireLimits  # noqa: PLC0415
     from hw.errors import ConfigError  # noqa: PLC0415
     from hw.jointmap import load_robot_config  # noqa: PLC0415
-    from hw.safety import JointLimits  # noqa: PLC0415
 
     cfg = load_robot_config(joint_map)
     if not isinstance(cfg, DdsHardwareConfig):
         raise ConfigError(f"--joint-map {joint_map}: a simulated G1 over DDS needs a DDS hardware config (transport: dds)")
-    return WireAudit(g1.JOINT_NAMES, JointLimits.from_joint_map(g1.JOINT_NAMES, cfg.joints))
+    return WireAudit(g1.JOINT_NAMES, WireLimits.of(g1.JOINT_NAMES, cfg.joints))
 
 
 class _Server:

@@ -1,10 +1,12 @@
-"""`g1ctl eval --suite smoke|PATH [--workers N] [--address ADDR] [--report PATH] [--progress] [--first-seed N]`: a sweep.
+"""`g1ctl eval --suite smoke|robustness|faults|PATH [--workers N] [--address ADDR] [--report PATH] [--progress]
+[--first-seed N] [--seeds N] [--hardware CONFIG] [--against REPORT]`: a sweep.
 
-Every episode of the suite (`controller/eval/suite.py`) runs on the simulator, in this process
-(`--workers 1`) or as Ray tasks (a local instance with N CPUs that starts and stops with the
-command, or the cluster at `--address`). The report (JSON, with a journal beside it that lets an
-interrupted sweep resume) gives per condition the episodes, falls, survival with its 95 %
-interval and the velocity error; the exit status is 1 when a condition misses the suite's criteria.
+Every episode of the suite (`controller/eval/suite.py`) runs on the simulator or simulated
+hardware, in this process (`--workers 1`) or as Ray tasks (a local instance with N CPUs that
+starts and stops with the command, or the cluster at `--address`). The report (JSON, with a
+journal beside it that lets an interrupted sweep resume) gives per condition the episodes,
+falls, survival with its 95 % interval and the velocity error, and for fault drills their
+verdicts; the exit status is 1 when a condition misses the suite's criteria or a drill fails.
 """
 
 from __future__ import annotations

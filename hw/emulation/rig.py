@@ -19,11 +19,10 @@ from hw.emulation.faults import FaultPlan
 from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
-from hw.emulation.wire_audit import WireAudit
+from hw.emulation.wire_audit import WireAudit, WireLimits
 from hw.errors import ConfigError, EmulatorError
 from hw.jointmap import BusConfig, HardwareConfig, load_motor_models
 from hw.protocols.mit import MitRanges, ReplyVariant
-from hw.safety import JointLimits
 
 
 class SimulatedHardware:
@@ -33,7 +32,7 @@ class SimulatedHardware:
         self.plant = plant
         self.faults = faults or {}
         names = tuple(cfg.joints)
-        self.audit = WireAudit(names, JointLimits.from_joint_map(names, cfg.joints))
+        self.audit = WireAudit(names, WireLimits.of(names, cfg.joints))
         token = uuid.uuid4().hex[:8]
         models = load_motor_models()
         self.emulators: list[MitBusEmulator | Rs485PortEmulator] = []

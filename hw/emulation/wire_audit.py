@@ -7,20 +7,64 @@ the firmware sees it) and the state it is in: `active` (holding a position with 
 watchdog, a latched error, motor mode off) or `seized` (the stuck-motor drill). The audit
 counts commands outside the joint map's limits and finds when every motor was last brought
 to a safe state and stayed there.
+
+An independent judge: it reads the joint map itself and shares no code with the host's safety
+layer (`hw.safety`), so a mistake there cannot hide itself here.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 import numpy as np
-
-from hw.safety import JointLimits, outside_limits
 
 MotorState = Literal["active", "damping", "limp", "seized"]
 SAFE: frozenset[str] = frozenset({"damping", "limp"})
 EXAMPLES_KEPT = 5
+
+
+# The codecs quantize what they carry, so a command at a limit may decode a hair past it: a
+# position by under 1e-3 rad, a velocity or torque by under 1 % of its limit (12-bit MIT fields).
+TOLERANCE_REL = 0.01
+TOLERANCE_ABS = 1e-3
+
+
+class JointMapEntry(Protocol):
+    """What the audit reads of a joint map entry (a bus joint or a G1 joint over DDS)."""
+
+    @property
+    def position_limits(self) -> tuple[float, float]: ...
+    @property
+    def velocity_limit(self) -> float: ...
+    @property
+    def torque_limit(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class WireLimits:
+    """The joint map's limits in joint order, widened by one quantization step."""
+
+    q_min: np.ndarray
+    q_max: np.ndarray
+    dq_max: np.ndarray
+    tau_max: np.ndarray
+
+    @staticmethod
+    def of(names: tuple[str, ...], joints: Mapping[str, JointMapEntry]) -> WireLimits:
+        q = np.array([joints[n].position_limits for n in names], dtype=float)
+        dq = np.array([joints[n].velocity_limit for n in names], dtype=float)
+        tau = np.array([joints[n].torque_limit for n in names], dtype=float)
+        widen = 1 + TOLERANCE_REL
+        return WireLimits(q[:, 0] - TOLERANCE_ABS, q[:, 1] + TOLERANCE_ABS, dq * widen + TOLERANCE_ABS, tau * widen + TOLERANCE_ABS)
+
+    def outside(self, index: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Per command (joints `index`, joint side): True where it leaves the limits. A position counts only with
+        stiffness (kp > 0): a damping command carries none. Not finite is outside."""
+        with np.errstate(invalid="ignore"):
+            q_bad = (kp > 0) & ~((q >= self.q_min[index]) & (q <= self.q_max[index]))
+            return q_bad | ~(np.abs(dq) <= self.dq_max[index]) | ~(np.abs(tau) <= self.tau_max[index]) | ~np.isfinite(kp)
 
 
 @dataclass(frozen=True)
@@ -35,7 +79,7 @@ class WireViolation:
 class WireAudit:
     """Fed by the emulated motors (one call per motor and control step, or one per whole-robot frame)."""
 
-    def __init__(self, names: tuple[str, ...], limits: JointLimits) -> None:
+    def __init__(self, names: tuple[str, ...], limits: WireLimits) -> None:
         self.names = names
         self.limits = limits
         self._index = {name: i for i, name in enumerate(names)}
@@ -60,7 +104,7 @@ class WireAudit:
 
     def _check(self, time: float, index: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray, tau: np.ndarray) -> None:
         self.commands += len(index)
-        bad = outside_limits(self.limits, index, q, dq, kp, tau)
+        bad = self.limits.outside(index, q, dq, kp, tau)
         for k in np.flatnonzero(bad):
             self.outside += 1
             if len(self.examples) < EXAMPLES_KEPT:

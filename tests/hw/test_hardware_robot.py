@@ -297,3 +297,23 @@ def test_rewritten_command_after_rearm_is_step_limited_again(g1_model) -> None:
         run_cycles(host, twin, 1)
         sent = [q for joint, q, kp, _ in plant.applied[start:] if joint == "left_knee_joint" and kp > 0]
         assert sent and abs(sent[-1] - host.default_pose[knee]) <= host.cfg.safety.max_position_step + 0.02
+
+
+def test_a_host_with_a_wrong_joint_map_is_caught_on_the_wire(g1_model) -> None:
+    """The host believes the knee goes to 10 rad; the motors' joint map says 2.88: the audit sees the difference."""
+
+    def loose_knee(cfg: HardwareConfig) -> HardwareConfig:
+        joints = dict(cfg.joints)
+        joints["left_knee_joint"] = dataclasses.replace(joints["left_knee_joint"], position_limits=(-0.1, 10.0))
+        return dataclasses.replace(cfg, joints=joints)
+
+    with rig(g1_model, host_cfg=loose_knee) as (host, twin, _plant):
+        activate(host, twin)
+        n, knee = g1.NUM_JOINTS, g1.JOINT_NAMES.index("left_knee_joint")
+        q = host.default_pose.copy()
+        q[knee] = 3.5
+        host.write(JointCommand(q=q, dq=np.zeros(n), kp=np.full(n, 40.0), kd=np.ones(n), tau_ff=np.zeros(n)))
+        run_cycles(host, twin, 10)  # 0.3 rad a cycle: the knee target passes 2.88 rad on the way
+        report = twin.audit.report()
+        assert report["outside_limits"] >= 1 and {v["joint"] for v in report["outside_examples"]} == {"left_knee_joint"}
+        assert report["commands"] >= 29 * 10
