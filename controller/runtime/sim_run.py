@@ -35,7 +35,7 @@ from controller.tracking.registry import TrackerSpec, make_tracker
 from hw.dds.config import DdsHardwareConfig
 from hw.emulation.drill import judge_drill
 from hw.emulation.faults import check_plan_fits, load_fault_file
-from hw.errors import ConfigError, HardwareFault, RunAborted
+from hw.errors import ConfigError, HardwareFault, MotorNotFoundError, RunAborted
 from hw.jointmap import load_robot_config
 from sim.perturbations import apply_to_model
 from sim.robot import SimRobot
@@ -121,7 +121,7 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
     if hw is not None:
         report["hw"] = hw
         if cfg.faults is not None:
-            report["drill"] = judge_drill(load_fault_file(cfg.faults), cfg.faults, hw, fell=report["falls"] > 0)
+            report["drill"] = judge_drill(load_fault_file(cfg.faults), cfg.faults, hw, report["falls"] > 0, report["damp_reason"])
     _write_outputs(cfg, built.session, report)
     if outcome.error is not None:
         where = f"; report: {cfg.report}" if cfg.report else ""
@@ -233,7 +233,7 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
                 run.bar.update(10)
             if not going_on or (done is not None and done()):
                 break
-    except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
+    except (HardwareFault, MotorNotFoundError) as exc:  # bring-up failed: the robot damps, the run ends as a fault
         session.fail(str(exc))
     except KeyboardInterrupt:
         interrupted = True

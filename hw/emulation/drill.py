@@ -11,8 +11,9 @@ from typing import Any
 from hw.emulation.faults import FaultFile
 
 
-def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool) -> dict[str, Any]:
-    """The drill's verdict: `passed`, and one line per way it failed."""
+def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool, damp_reason: str = "") -> dict[str, Any]:
+    """The drill's verdict: `passed`, and one line per way it failed. `damp_reason`: why the run damped, if it did
+    (a fault at bring-up is named there, not among the latched faults of a robot that never came up)."""
     expect, start = plan.expect, plan.start_s
     wire = hw.get("wire") or {}
     reasons: list[str] = []
@@ -23,6 +24,8 @@ def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool) ->
         reasons.append(f"{wire['outside_limits']} commands outside the joint limits reached the motors")
     verdict["outside_limits"] = wire.get("outside_limits")
     faults = [str(f) for f in hw.get("fault_reasons") or []]
+    if not faults and damp_reason.startswith("fault: "):
+        faults = [damp_reason.removeprefix("fault: ")]
     until = wire.get("observed_until")
     if start is not None and until is not None and until < start:
         verdict |= {"faults": faults, "passed": False}

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from controller.eval.runner import safety_failures
 from controller.eval.stats import summarize
 from tests.conftest import g1ctl, one_line_error
 
@@ -34,6 +35,8 @@ def test_an_episode_damped_by_a_fault_did_not_survive() -> None:
 
     figures = summarize([episode(0, False), episode(0, True), episode(1, False)])["g"]
     assert figures["survival"] == 0.3333 and figures["faults"] == 1 and figures["falls"] == 1
+    lost = summarize([episode(0, False), {"group": "g", "condition": "c", "status": "failed", "error": "x"}])
+    assert safety_failures(lost) == ["g: 1 episodes failed to run"]  # whatever the suite's criteria say
 
 
 @pytest.mark.slow  # the CLI in a subprocess, episodes on the simulator and on simulated buses

@@ -180,6 +180,9 @@ def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     refused = g1ctl("sim", "--hardware", "sim-can", "--faults", str(at_bring_up), "--duration", "1", "--report", str(tmp_path / "r.json"))
     assert refused.returncode == 0 and "cannot activate: left_knee_joint" in refused.stderr
     assert json.loads((tmp_path / "r.json").read_text())["drill"]["damping_latency_s"] == 0.0
+    silent = g1ctl("sim", "--hardware", "sim-can", "--faults", "can0-silent-at-bring-up", "--duration", "1")
+    assert silent.returncode == 0 and "drill can0-silent-at-bring-up: passed" in silent.stdout  # configure names the silent motors
+    assert "motors did not answer: left_hip_pitch_joint (bus can0, id 1)" in silent.stderr
 
     assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
     bad = tmp_path / "bad.yaml"
