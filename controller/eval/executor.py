@@ -16,6 +16,9 @@ from typing import Any, Self
 from hw.errors import ConfigError
 
 RAY_HINT = "--workers > 1 and --address need Ray: pip install -e '.[eval]' (or run with --workers 1)"
+# A task is one episode on one CPU: its numerical libraries get one thread each. OpenBLAS otherwise starts a
+# thread per core in every worker, and on a 2-core machine two workers' idle threads spin against each other.
+SINGLE_THREADED = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 
 class TaskLost(Exception):
@@ -43,10 +46,11 @@ class Executor:
             raise ConfigError(RAY_HINT) from exc
         self._ray = ray
         if not ray.is_initialized():
+            quiet: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING, "runtime_env": {"env_vars": SINGLE_THREADED}}
             if self.address is not None:
-                ray.init(address=self.address, log_to_driver=False, logging_level=logging.WARNING)
+                ray.init(address=self.address, **quiet)
             else:
-                ray.init(num_cpus=self.workers, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
+                ray.init(num_cpus=self.workers, include_dashboard=False, **quiet)
             self._started = True
         return self
 

@@ -114,6 +114,7 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
                     base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
                     result = base | {"status": "failed", "error": str(result)}
                 record(result)
+            swept = time.perf_counter() - t0  # the sweep, Ray's start included, up to its last result (not Ray's teardown)
     results = [finished[e.id] for e in every]
     conditions = summarize(results)
     report: dict[str, Any] = {
@@ -121,7 +122,7 @@ def run_suite(cfg: EvalConfig) -> dict[str, Any]:
         "description": cfg.suite.description,
         "workers": cfg.workers,
         "address": cfg.address,
-        "wall_seconds": round(time.perf_counter() - t0 + _earlier_wall_seconds(cfg.report, len(every) - len(todo)), 3),
+        "wall_seconds": round(swept + _earlier_wall_seconds(cfg.report, len(every) - len(todo)), 3),
         "episodes_run": len(todo),
         "episodes_resumed": len(every) - len(todo),
         "conditions": conditions,

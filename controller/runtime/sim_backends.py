@@ -32,8 +32,8 @@ from sim.robot import SimRobot
 # no simulated time, so replies may take longer in wall time than on real hardware.
 SIM_SOFT_START_S = 0.2
 SIM_CYCLE_TIMEOUT_S = 0.006
-# A robot that faulted stays damped after the run: its motors are watched this much longer, so
-# the wire audit records what each did last (damped, or limp on its own watchdog).
+# A robot that faulted (or never came up) stays as it is after the run: its motors are watched this
+# much longer, so the wire audit records what each did last (damped, or limp on its own watchdog).
 WATCH_AFTER_FAULT_S = 0.2
 # Simulated time waits this long (wall clock, at most) for each emulated IMU frame to reach the host.
 IMU_ARRIVAL_TIMEOUT_S = 0.05
@@ -159,10 +159,13 @@ class SimulatedHardwareBackend(HardwareBackend):
 
     def close(self) -> None:
         try:
-            if self.host.state is Lifecycle.ERROR:
+            if self.host.state in (Lifecycle.ERROR, Lifecycle.UNCONFIGURED):  # faulted, or never brought up
                 end = self.now() + WATCH_AFTER_FAULT_S
                 while self.now() < end:
-                    self.cycle()  # the host keeps damping
+                    if self.host.state is Lifecycle.ERROR:
+                        self.cycle()  # the host keeps damping
+                    else:
+                        self._step_twin()  # no bus open: the motors keep their own counsel
             for wrapper in reversed(self._wrappers):
                 wrapper.close()
             super().close()
