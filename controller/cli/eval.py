@@ -46,12 +46,12 @@ def with_hardware(suite: SuiteConfig, hardware: str) -> SuiteConfig:
     from hw.jointmap import load_robot_config  # noqa: PLC0415
 
     cfg = load_robot_config(hardware)
+    if not cfg.simulated:
+        raise ConfigError(f"--hardware {hardware} is a real robot's config: an evaluation runs on simulated hardware")
     if isinstance(cfg, DdsHardwareConfig):
         raise ConfigError(
             f"--hardware {hardware}: perturbations need the physics in this process: give simulated buses (sim-can, sim-mixed)"
         )
-    if not cfg.simulated:
-        raise ConfigError(f"--hardware {hardware} is a real robot's config: an evaluation runs on simulated hardware")
     return dataclasses.replace(suite, hardware=(hardware,))
 
 
