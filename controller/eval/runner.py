@@ -58,6 +58,7 @@ def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, An
     perturbed = episode.perturbations if episode.perturbations != Perturbations() else None
     cfg = SimRunConfig(
         scenario=episode.scenario, policy=episode.policy, planner=episode.planner, duration=episode.duration_s, seed=episode.seed,
+        tracker=None if episode.tracker == "default" else episode.tracker,
         hardware=None if episode.hardware == "none" else episode.hardware, perturbations=perturbed, assets_dir=assets_dir,
         faults=episode.faults,
     )  # fmt: skip

@@ -1,6 +1,6 @@
 """An evaluation suite (YAML) and the episodes it crosses into.
 
-A suite names what varies: scenarios, policies, whether the planner is in the loop, hardware
+A suite names what varies: scenarios, policies, whether the planner is in the loop, trackers, hardware
 configs, perturbation conditions (a shipped set by name, or inline values, any of them a range
 drawn per episode from its seed), fault drills (plans
 of `configs/faults/`, each on the simulated hardware it is written for) and seeds; pass
@@ -36,6 +36,7 @@ class SuiteConfig:
     scenarios: tuple[str, ...] = ("walk_turn_stop",)
     policies: tuple[str, ...] = ("fastsac",)
     planner: tuple[bool, ...] = (False,)
+    trackers: tuple[str, ...] = ("default",)  # "default": velocity, or decoupled with the planner; plan followers only with it
     hardware: tuple[str, ...] = ("none",)  # "none": the simulator directly
     perturbations: dict[str, Any] = field(default_factory=lambda: {"nominal": {}})  # label -> a set's name or its values
     faults: tuple[str, ...] = ()  # fault drills: plans by name or path ("all": every plan of configs/faults)
@@ -47,6 +48,13 @@ class SuiteConfig:
     def __post_init__(self) -> None:
         if self.duration_s <= 0 or self.seeds < 1 or self.first_seed < 0:
             raise ConfigError("a suite needs duration_s > 0, seeds >= 1 and first_seed >= 0")
+        from controller.tracking.registry import PLAN_FOLLOWING, available_trackers  # noqa: PLC0415
+
+        unknown = [t for t in self.trackers if t != "default" and t not in available_trackers()]
+        if unknown:
+            raise ConfigError(f"unknown trackers {unknown} in the suite (valid: default, {', '.join(available_trackers())})")
+        if any(t in PLAN_FOLLOWING for t in self.trackers) and True not in self.planner:
+            raise ConfigError(f"trackers {sorted(PLAN_FOLLOWING & set(self.trackers))} follow planned motion: add planner: [true]")
 
 
 @dataclass(frozen=True)
@@ -60,12 +68,14 @@ class Episode:
     seed: int
     duration_s: float
     faults: str | None = None  # a fault plan: this episode is a drill
+    tracker: str = "default"
     randomized: bool = False  # the condition gives ranges: `perturbations` were drawn from this episode's seed
 
     @property
     def group(self) -> str:
         """Everything but the seed: the condition a survival rate is taken over."""
-        return f"{self.scenario}/{self.policy}/{'planner' if self.planner else 'direct'}/{self.hardware}/{self.condition}"
+        loop = ("planner" if self.planner else "direct") + (f"+{self.tracker}" if self.tracker != "default" else "")
+        return f"{self.scenario}/{self.policy}/{loop}/{self.hardware}/{self.condition}"
 
     @property
     def id(self) -> str:
@@ -125,17 +135,16 @@ def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
         raise ConfigError(f"{source}: criteria for unknown conditions: {', '.join(unknown)} (conditions: {known})")
     seeds = range(cfg.first_seed, cfg.first_seed + cfg.seeds)
     randomized = {label: has_ranges(condition.values) for label, condition in conditions.items()}
+    from controller.tracking.registry import PLAN_FOLLOWING  # noqa: PLC0415
+
+    loops = [(t, p) for t, p in itertools.product(cfg.trackers, cfg.planner) if p or t not in PLAN_FOLLOWING]
     perturbed = [
-        Episode(
-            scenario, policy, planner, hardware, label, conditions[label].draw(seed), seed, cfg.duration_s, randomized=randomized[label]
-        )
-        for scenario, policy, planner, hardware, label, seed in itertools.product(
-            cfg.scenarios, cfg.policies, cfg.planner, cfg.hardware, conditions, seeds
-        )
+        Episode(sc, pol, planner, hw, label, conditions[label].draw(seed), seed, cfg.duration_s, randomized=randomized[label], tracker=t)
+        for sc, pol, (t, planner), hw, label, seed in itertools.product(cfg.scenarios, cfg.policies, loops, cfg.hardware, conditions, seeds)
     ]
     drilled = [
-        Episode(scenario, policy, planner, drills[label][1], label, Perturbations(), seed, cfg.duration_s, faults=drills[label][0])
-        for scenario, policy, planner, label, seed in itertools.product(cfg.scenarios, cfg.policies, cfg.planner, drills, seeds)
+        Episode(sc, pol, planner, drills[label][1], label, Perturbations(), seed, cfg.duration_s, faults=drills[label][0], tracker=t)
+        for sc, pol, (t, planner), label, seed in itertools.product(cfg.scenarios, cfg.policies, loops, drills, seeds)
     ]
     if not perturbed and not drilled:
         raise ConfigError(f"{source}: the suite has no episodes: give perturbation conditions or fault plans")

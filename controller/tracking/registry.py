@@ -47,6 +47,11 @@ TRACKERS: dict[str, Callable[[TrackerSpec], Tracker]] = {
 }
 
 
+# The trackers whose `Tracker.needs_plan` is set: they follow planned frames, so they run only with the planner
+# (known here, before any is built, for a sweep to cross trackers with the planner on and off).
+PLAN_FOLLOWING = frozenset({"whole-body"})
+
+
 def available_trackers() -> list[str]:
     return sorted(TRACKERS)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -135,3 +136,25 @@ def test_an_episode_with_its_robot_in_another_process_holds_two_cpus() -> None:
     from controller.eval.runner import episode_cpus
 
     assert (episode_cpus("none"), episode_cpus("sim-can"), episode_cpus("sim-dds")) == (1, 1, 2)
+
+
+def test_trackers_cross_with_the_planner_and_plan_followers_run_only_with_it(assets) -> None:
+    from controller.tracking.registry import PLAN_FOLLOWING, TrackerSpec, available_trackers, make_tracker
+    from hw import g1
+
+    for name in available_trackers():  # the registry's list agrees with the trackers themselves
+        assert make_tracker(name, TrackerSpec("fastsac", assets, g1.JOINT_NAMES)).needs_plan == (name in PLAN_FOLLOWING), name
+    suite = SuiteConfig(name="t", duration_s=2.5, planner=(False, True), trackers=("default", "whole-body"), seeds=1)
+    groups = [e.group for e in episodes(suite)]
+    assert groups == [
+        "walk_turn_stop/fastsac/direct/none/nominal",
+        "walk_turn_stop/fastsac/planner/none/nominal",
+        "walk_turn_stop/fastsac/planner+whole-body/none/nominal",
+    ]
+    report = run_suite(EvalConfig(dataclasses.replace(suite, planner=(True,), trackers=("whole-body",)), "t"))
+    (episode,) = report["episodes"]
+    assert episode["status"] == "done" and episode["falls"] == 0, episode
+    with pytest.raises(ConfigError, match="unknown trackers"):
+        SuiteConfig(name="t", duration_s=1.0, trackers=("nope",))
+    with pytest.raises(ConfigError, match=r"follow planned motion: add planner: \[true\]"):
+        SuiteConfig(name="t", duration_s=1.0, trackers=("whole-body",))
