@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install install-train demo test test-quick lint bench planner-data planner bench-planner clean
+.PHONY: install install-train demo test test-quick test-train lint bench planner-data planner bench-planner clean
 
 install: $(STAMP)
 
@@ -22,13 +22,18 @@ install-train: install
 demo: install
 	$(BIN)/g1ctl sim --scenario walk_turn_stop --video runs/demo.mp4 --report runs/demo.json --progress
 
-# `make test` runs every test. The ones marked `slow` (the CLI in a subprocess, benchmarks, the wheel
-# installed in a fresh venv) take most of the time: `make test-quick` (pytest -m "not slow") leaves them out.
+# `make test` runs every test on the base install; the ones that need torch skip, naming the train extra.
+# `make test-quick` leaves out the tests marked `slow` (over 2 s each, measured); `make test-train`
+# installs the train extra and runs the tests that need it. PYTEST_ARGS passes more options (CI: --durations=15).
+PYTEST_ARGS ?=
 test: install
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(PYTEST_ARGS)
 
 test-quick: install
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow" $(PYTEST_ARGS)
+
+test-train: install-train
+	$(BIN)/python -m pytest -q -m train $(PYTEST_ARGS)
 
 lint: install
 	$(BIN)/ruff check controller hw sim tests

@@ -16,6 +16,8 @@ import sys
 from collections.abc import Iterable
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import ROOT
 
 PACKAGES = ("controller", "hw", "sim")
@@ -181,13 +183,29 @@ print(json.dumps({"env": changed, "backend_changed": dict.__getitem__(matplotlib
 """
 
 
+def torch_modules() -> list[str]:
+    """The modules that import torch themselves: they load only where the train extra is installed."""
+    return sorted(module_name(ROOT / f) for f in direct_imports_of(("torch",), PACKAGES))
+
+
+def global_state_changed_by(modules: list[str]) -> dict[str, object]:
+    """What importing `modules` in a fresh interpreter changed: environment variables, matplotlib's backend.
+    The display variables are removed first, so that a module that would set a headless default has a reason to."""
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY", "MPLBACKEND")}
+    result = subprocess.run([sys.executable, "-c", _SIDE_EFFECTS, *modules], capture_output=True, text=True, cwd=ROOT, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    return dict(json.loads(result.stdout.strip().splitlines()[-1]))
+
+
 def test_importing_any_module_changes_no_global_state() -> None:
     """No environment variable set and no matplotlib backend chosen on import: that is for the
-    function that renders or draws. The display variables are removed so that a module that
-    would set a headless default has a reason to."""
-    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY", "MPLBACKEND")}
-    result = subprocess.run(
-        [sys.executable, "-c", _SIDE_EFFECTS, *modules_under(*PACKAGES)], capture_output=True, text=True, cwd=ROOT, env=env, timeout=180
-    )
-    assert result.returncode == 0, result.stderr
-    assert json.loads(result.stdout.strip().splitlines()[-1]) == {"env": [], "backend_changed": False}
+    function that renders or draws. The trainer's torch modules are checked by the next test."""
+    assert "controller.training.planner" in torch_modules()
+    modules = [m for m in modules_under(*PACKAGES) if m not in torch_modules()]
+    assert global_state_changed_by(modules) == {"env": [], "backend_changed": False}
+
+
+@pytest.mark.train
+def test_importing_the_trainer_changes_no_global_state() -> None:
+    pytest.importorskip("torch", reason="the train extra (torch) is not installed")
+    assert global_state_changed_by(torch_modules()) == {"env": [], "backend_changed": False}

@@ -26,8 +26,9 @@ from tests.conftest import ROOT
 CODE = ("controller", "hw", "sim")
 DATA = {"configs": "g1ctl_data/configs", "models": "g1ctl_data/models"}  # source folder -> where the wheel puts it
 PLANNER_FILES = ("models/planner/planner.onnx", "models/planner/planner.json")
-# What the commands below may take: building pulls nothing (no build isolation), installing pulls
-# the dependencies from the configured package index (about 16 s from this machine's local mirror).
+# What the commands below may take: building installs the build backend pyproject.toml asks for into an
+# isolated environment, as `pip install .` does for a user (the venv's own setuptools may be too old to
+# build a wheel); installing pulls the dependencies from the configured package index.
 BUILD_TIMEOUT_S, INSTALL_TIMEOUT_S = 300, 900
 
 
@@ -58,7 +59,7 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (src / rel).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(ROOT / rel, src / rel)
     build = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "--quiet", "-w", str(dist), str(src)],
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "-w", str(dist), str(src)],
         capture_output=True,
         text=True,
         timeout=BUILD_TIMEOUT_S,

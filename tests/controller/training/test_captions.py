@@ -127,8 +127,9 @@ def test_mirrored_pose_is_the_mirror_image_in_forward_kinematics(assets) -> None
     assert np.allclose(mfeet[:, ::-1] * flip, feet, atol=1e-6)  # left foot of the mirror = right foot mirrored
 
 
+@pytest.mark.train
 def test_training_clips_caption_and_mirror_imports() -> None:
-    pytest.importorskip("torch")
+    pytest.importorskip("torch", reason="the train extra (torch) is not installed")
     from controller.training.planner import training_clips
 
     qpos = turning_walk(120, seed=4)

@@ -17,7 +17,8 @@ from controller.planner.runtime import Planner
 from hw.errors import AssetError
 from tests.conftest import fake_embed, g1ctl, one_line_error, turning_walk
 
-torch = pytest.importorskip("torch")
+pytestmark = pytest.mark.train
+torch = pytest.importorskip("torch", reason="the train extra (torch) is not installed")
 
 from controller.training.planner import TrainConfig, train_planner  # noqa: E402
 
