@@ -246,13 +246,11 @@ def test_a_command_the_cli_refuses_is_caught() -> None:
 
 
 RUN_HERE = [command for command in README_COMMANDS if runs_here(command)]
+# Measured here: a sim 4-8 s, plan 1-2.5 s, scenarios 1.1-2.3 s (it loads MuJoCo); hw frame 0.5-1.2 s.
+SLOW_TO_RUN = ("sim", "plan", "scenarios")
 
 
-@pytest.mark.parametrize(
-    "command",
-    [pytest.param(c, marks=pytest.mark.slow) if c.argv[0] in ("sim", "plan") else c for c in RUN_HERE],
-    ids=str,
-)
+@pytest.mark.parametrize("command", [pytest.param(c, marks=pytest.mark.slow) if c.argv[0] in SLOW_TO_RUN else c for c in RUN_HERE], ids=str)
 def test_the_readmes_cheap_commands_run(command: Command, tmp_path: Path) -> None:
     argv = [*command.argv, *SIM_DURATION] if command.argv[0] == "sim" else list(command.argv)
     result = subprocess.run([*G1CTL, *argv], capture_output=True, text=True, cwd=tmp_path, env=dict(os.environ), timeout=300)
