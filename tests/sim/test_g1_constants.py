@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-import numpy as np
+from pathlib import Path
 
 from hw import g1 as constants
+from sim.dds_robot import DdsRobotConfig
 from sim.kinematics import FOOT_CONTACT_BODIES
 
 
@@ -44,4 +45,10 @@ def test_named_bodies_exist(g1_model) -> None:
     for body in (constants.ROOT_BODY, constants.TORSO_BODY, *constants.ANKLE_BODIES, *FOOT_CONTACT_BODIES):
         assert g1_model.body(body).id > 0
     assert g1_model.site(constants.IMU_SITE).id >= 0
-    assert np.isclose(g1_model.opt.timestep, 0.002)
+
+
+def test_the_physics_step_is_the_hardware_cycle(g1_model) -> None:
+    """One value, the others derived: the simulator steps once per hardware cycle (500 Hz: 2 ms), and so does
+    the simulated robot behind DDS."""
+    assert g1_model.opt.timestep == 1.0 / constants.CONTROL_CYCLE_HZ == 0.002
+    assert DdsRobotConfig(mjcf=Path("g1.xml")).period_s == g1_model.opt.timestep
