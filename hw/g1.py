@@ -13,8 +13,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-# rad/s: the joint velocity a command's velocity target is clamped to, every joint alike (the MJCF
-# states no velocity limit).
+# rad/s: the joint velocity a command's velocity target is clamped to, every joint alike. The MJCF
+# states no velocity limit; Unitree's G1 URDF (carried in the holosoma wbt exports' metadata) gives
+# 20 to 37 rad/s per joint, below this bound for the hip roll and knee (20) and wrist pitch and yaw (22).
 COMMAND_VELOCITY_LIMIT = 30.0
 
 
@@ -25,8 +26,10 @@ class G1Joint:
     name: str
     position_limits: tuple[float, float]  # rad: the MJCF joint's range
     effort_limit: float  # N m: the MJCF joint's actuatorfrcrange, the torque the physics clamps to
-    kp: float  # N m/rad: bring-up stiffness (soft start, sweeps, holding), about the holosoma policies' own
-    kd: float  # N m s/rad: bring-up damping
+    # Bring-up gains (soft start, sweeps): the holosoma policies' gains (their ONNX metadata) rounded, except
+    # hip roll 40 / 2.5 (policies 99.1 / 6.3), waist roll and pitch 40 / 2.5 (28.5 / 1.8), wrist roll 16.8 / 1.1 (14.3 / 0.9).
+    kp: float  # N m/rad
+    kd: float  # N m s/rad
     default_pos: float = 0.0  # rad: the standing pose the locomotion policies were trained around
     velocity_limit: float = COMMAND_VELOCITY_LIMIT  # rad/s
 
