@@ -52,9 +52,10 @@ def with_g1_joint_table(data: Any, every_joint: tuple[str, ...] = ()) -> Any:
         joints = {}
     if not isinstance(joints, dict):
         return data
-    joints = {**{name: {} for name in every_joint if name in G1_JOINT and name not in joints}, **joints}
+    names = [*(n for n in every_joint if n in G1_JOINT or n in joints), *(n for n in joints if n not in every_joint)]
+    joints = {name: joints.get(name) for name in names}  # in `every_joint`'s order, the robot's
     filled = {
-        name: {**table_values(G1_JOINT[name]), **joint} if isinstance(joint, dict) and name in G1_JOINT else joint
+        name: {**table_values(G1_JOINT[name]), **(joint or {})} if isinstance(joint, dict | None) and name in G1_JOINT else joint
         for name, joint in joints.items()
     }
     return {**data, "joints": filled}
