@@ -42,7 +42,7 @@ def test_every_joint_takes_the_joint_table_unless_the_config_narrows_it(tmp_path
     assert isinstance(bench, DdsHardwareConfig)
     knee = bench.joints["left_knee_joint"]
     assert (knee.position_limits, knee.kp, knee.kd, knee.torque_limit) == ((0.0, 2.0), 60.0, g1.G1_JOINT["left_knee_joint"].kd, 139.0)
-    assert bench.joints["right_knee_joint"] == cfg.joints["right_knee_joint"]
+    assert bench.joints["right_knee_joint"] == cfg.joints["right_knee_joint"] and tuple(bench.joints) == JOINT_NAMES
 
 
 def test_a_bus_command_refuses_a_dds_config_in_one_line() -> None:
