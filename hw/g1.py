@@ -1,50 +1,83 @@
-"""Unitree G1 (29 DoF) constants, checked against the compiled MJCF by `tests/sim/test_constants.py`.
+"""Unitree G1 (29 DoF) constants, checked against the compiled MJCF by `tests/sim/test_g1_constants.py`.
 
-Joint order is the standard G1 order used by Unitree and holosoma. The default pose and
-effort limits come from holosoma's G1 robot config and MJCF (holosoma 0.0.3 /
+`G1_JOINTS` is the one table of the robot's joints: their order, limits, bring-up gains and
+standing pose. Everything else reads it (the simulator's force limits, the hardware configs'
+defaults and their override check, the policies' default pose). Joint order is the standard
+G1 order used by Unitree and holosoma. Position and effort limits are the MJCF's joint ranges
+and `actuatorfrcrange`s; the default pose is holosoma's G1 `default_dof_angles` (holosoma 0.0.3 /
 holosoma-inference 0.1.3, Apache-2.0).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass
 
-JOINT_NAMES: tuple[str, ...] = (
-    "left_hip_pitch_joint", "left_hip_roll_joint", "left_hip_yaw_joint",
-    "left_knee_joint", "left_ankle_pitch_joint", "left_ankle_roll_joint",
-    "right_hip_pitch_joint", "right_hip_roll_joint", "right_hip_yaw_joint",
-    "right_knee_joint", "right_ankle_pitch_joint", "right_ankle_roll_joint",
-    "waist_yaw_joint", "waist_roll_joint", "waist_pitch_joint",
-    "left_shoulder_pitch_joint", "left_shoulder_roll_joint", "left_shoulder_yaw_joint",
-    "left_elbow_joint", "left_wrist_roll_joint", "left_wrist_pitch_joint", "left_wrist_yaw_joint",
-    "right_shoulder_pitch_joint", "right_shoulder_roll_joint", "right_shoulder_yaw_joint",
-    "right_elbow_joint", "right_wrist_roll_joint", "right_wrist_pitch_joint", "right_wrist_yaw_joint",
+# rad/s: the joint velocity a command's velocity target is clamped to, every joint alike. The MJCF
+# states no velocity limit; Unitree's G1 URDF (carried in the holosoma wbt exports' metadata) gives
+# 20 to 37 rad/s per joint, below this bound for the hip roll and knee (20) and wrist pitch and yaw (22).
+COMMAND_VELOCITY_LIMIT = 30.0
+
+
+@dataclass(frozen=True)
+class G1Joint:
+    """One joint of the G1, joint side: what a hardware config takes unless it narrows a limit or changes a gain."""
+
+    name: str
+    position_limits: tuple[float, float]  # rad: the MJCF joint's range
+    effort_limit: float  # N m: the MJCF joint's actuatorfrcrange, the torque the physics clamps to
+    # Bring-up gains (soft start, sweeps): the holosoma policies' gains (their ONNX metadata) rounded, except
+    # hip roll 40 / 2.5 (policies 99.1 / 6.3), waist roll and pitch 40 / 2.5 (28.5 / 1.8), wrist roll 16.8 / 1.1 (14.3 / 0.9).
+    kp: float  # N m/rad
+    kd: float  # N m s/rad
+    default_pos: float = 0.0  # rad: the standing pose the locomotion policies were trained around
+    velocity_limit: float = COMMAND_VELOCITY_LIMIT  # rad/s
+
+
+_J = G1Joint
+G1_JOINTS: tuple[G1Joint, ...] = (
+    #  name                          position limits       effort   kp    kd   default pose
+    _J("left_hip_pitch_joint",       (-2.5307, 2.8798),     88.0,  40.0, 2.5, -0.312),
+    _J("left_hip_roll_joint",        (-0.5236, 2.9671),    139.0,  40.0, 2.5),
+    _J("left_hip_yaw_joint",         (-2.7576, 2.7576),     88.0,  40.0, 2.5),
+    _J("left_knee_joint",            (-0.087267, 2.8798),  139.0,  99.0, 6.3,  0.669),
+    _J("left_ankle_pitch_joint",     (-0.87267, 0.5236),    50.0,  28.5, 1.8, -0.363),
+    _J("left_ankle_roll_joint",      (-0.2618, 0.2618),     50.0,  28.5, 1.8),
+    _J("right_hip_pitch_joint",      (-2.5307, 2.8798),     88.0,  40.0, 2.5, -0.312),
+    _J("right_hip_roll_joint",       (-2.9671, 0.5236),    139.0,  40.0, 2.5),
+    _J("right_hip_yaw_joint",        (-2.7576, 2.7576),     88.0,  40.0, 2.5),
+    _J("right_knee_joint",           (-0.087267, 2.8798),  139.0,  99.0, 6.3,  0.669),
+    _J("right_ankle_pitch_joint",    (-0.87267, 0.5236),    50.0,  28.5, 1.8, -0.363),
+    _J("right_ankle_roll_joint",     (-0.2618, 0.2618),     50.0,  28.5, 1.8),
+    _J("waist_yaw_joint",            (-2.618, 2.618),       88.0,  40.0, 2.5),
+    _J("waist_roll_joint",           (-0.52, 0.52),         50.0,  40.0, 2.5),
+    _J("waist_pitch_joint",          (-0.52, 0.52),         50.0,  40.0, 2.5),
+    _J("left_shoulder_pitch_joint",  (-3.0892, 2.6704),     25.0,  14.3, 0.9,  0.2),
+    _J("left_shoulder_roll_joint",   (-1.5882, 2.2515),     25.0,  14.3, 0.9,  0.2),
+    _J("left_shoulder_yaw_joint",    (-2.618, 2.618),       25.0,  14.3, 0.9),
+    _J("left_elbow_joint",           (-1.0472, 2.0944),     25.0,  14.3, 0.9,  0.6),
+    _J("left_wrist_roll_joint",      (-1.97222, 1.97222),   25.0,  16.8, 1.1),
+    _J("left_wrist_pitch_joint",     (-1.61443, 1.61443),    5.0,  16.8, 1.1),
+    _J("left_wrist_yaw_joint",       (-1.61443, 1.61443),    5.0,  16.8, 1.1),
+    _J("right_shoulder_pitch_joint", (-3.0892, 2.6704),     25.0,  14.3, 0.9,  0.2),
+    _J("right_shoulder_roll_joint",  (-2.2515, 1.5882),     25.0,  14.3, 0.9, -0.2),
+    _J("right_shoulder_yaw_joint",   (-2.618, 2.618),       25.0,  14.3, 0.9),
+    _J("right_elbow_joint",          (-1.0472, 2.0944),     25.0,  14.3, 0.9,  0.6),
+    _J("right_wrist_roll_joint",     (-1.97222, 1.97222),   25.0,  16.8, 1.1),
+    _J("right_wrist_pitch_joint",    (-1.61443, 1.61443),    5.0,  16.8, 1.1),
+    _J("right_wrist_yaw_joint",      (-1.61443, 1.61443),    5.0,  16.8, 1.1),
 )  # fmt: skip
+del _J
 
+G1_JOINT: dict[str, G1Joint] = {joint.name: joint for joint in G1_JOINTS}
+JOINT_NAMES: tuple[str, ...] = tuple(G1_JOINT)
 NUM_JOINTS = len(JOINT_NAMES)
 
-# Standing pose (rad) the locomotion policies were trained around.
-DEFAULT_JOINT_POS: dict[str, float] = {
-    "left_hip_pitch_joint": -0.312, "left_knee_joint": 0.669, "left_ankle_pitch_joint": -0.363,
-    "right_hip_pitch_joint": -0.312, "right_knee_joint": 0.669, "right_ankle_pitch_joint": -0.363,
-    "left_shoulder_pitch_joint": 0.2, "left_shoulder_roll_joint": 0.2, "left_elbow_joint": 0.6,
-    "right_shoulder_pitch_joint": 0.2, "right_shoulder_roll_joint": -0.2, "right_elbow_joint": 0.6,
-}  # fmt: skip
-
-# Peak joint torque (N m), the MJCF's actuatorfrcrange per joint.
-EFFORT_LIMITS: dict[str, float] = {
-    "left_hip_pitch_joint": 88.0, "left_hip_roll_joint": 139.0, "left_hip_yaw_joint": 88.0,
-    "left_knee_joint": 139.0, "left_ankle_pitch_joint": 50.0, "left_ankle_roll_joint": 50.0,
-    "right_hip_pitch_joint": 88.0, "right_hip_roll_joint": 139.0, "right_hip_yaw_joint": 88.0,
-    "right_knee_joint": 139.0, "right_ankle_pitch_joint": 50.0, "right_ankle_roll_joint": 50.0,
-    "waist_yaw_joint": 88.0, "waist_roll_joint": 50.0, "waist_pitch_joint": 50.0,
-    "left_shoulder_pitch_joint": 25.0, "left_shoulder_roll_joint": 25.0, "left_shoulder_yaw_joint": 25.0,
-    "left_elbow_joint": 25.0, "left_wrist_roll_joint": 25.0, "left_wrist_pitch_joint": 5.0,
-    "left_wrist_yaw_joint": 5.0,
-    "right_shoulder_pitch_joint": 25.0, "right_shoulder_roll_joint": 25.0, "right_shoulder_yaw_joint": 25.0,
-    "right_elbow_joint": 25.0, "right_wrist_roll_joint": 25.0, "right_wrist_pitch_joint": 5.0,
-    "right_wrist_yaw_joint": 5.0,
-}  # fmt: skip
+# Views of the table by joint name.
+# The standing pose's non-zero joints (rad); a joint not listed stands at 0.
+DEFAULT_JOINT_POS: dict[str, float] = {j.name: j.default_pos for j in G1_JOINTS if j.default_pos != 0.0}
+# Peak joint torque (N m) per joint.
+EFFORT_LIMITS: dict[str, float] = {j.name: j.effort_limit for j in G1_JOINTS}
 
 # Rate (Hz) of the hardware cycle: one command to and one reply from every motor per period
 # (the G1's rt/lowcmd rate; bring-up and the hardware runtime pace their loops on it).

@@ -2,9 +2,9 @@
 
 `load_hardware_config` validates everything a bring-up engineer can get wrong in the
 YAML: unknown keys, missing or unknown joints, duplicate motor ids on one bus, a bus that
-is not declared, a motor model without ranges, limits in the wrong order. A G1 joint
-without `torque_limit` takes the G1's effort limit (`hw.g1.EFFORT_LIMITS`, the MJCF's),
-so a config of the G1's own actuators does not restate the table the physics clamps to.
+is not declared, a motor model without ranges, limits in the wrong order. A G1 joint's
+limits and bring-up gains are the G1 joint table's (`hw.g1.G1_JOINTS`) unless the YAML
+narrows them; a wider limit is refused (`hw.joint_overrides`).
 """
 
 from __future__ import annotations
@@ -16,9 +16,10 @@ from typing import Literal
 from hw.dds.config import DdsHardwareConfig, dds_config_from, is_dds_config
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
+from hw.joint_overrides import check_within_g1_limits, with_g1_joint_table
 from hw.protocols.mit import MitRanges
 from hw.shipped import config_dir
-from hw.yamlconfig import check_position_limits, from_dict, load_yaml, preset_names, resolve_preset, with_g1_torque_limits
+from hw.yamlconfig import check_position_limits, from_dict, load_yaml, preset_names, resolve_preset
 
 
 @dataclass(frozen=True)
@@ -47,7 +48,8 @@ class JointConfig:
     id: int
     position_limits: tuple[float, float]
     velocity_limit: float
-    torque_limit: float  # N m, joint side; may be left out of the YAML for a G1 joint (see the module docstring)
+    torque_limit: float  # N m, joint side
+    # A G1 joint leaves out what the G1 joint table holds: position, velocity and torque limits, kp, kd.
     model: str = ""  # mit: a model in configs/motors.yaml
     reply: Literal["basic", "cubemars", "damiao"] = "cubemars"  # mit reply variant
     direction: int = 1  # +1 or -1: motor positive direction relative to the joint
@@ -148,7 +150,7 @@ def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOIN
     data = load_yaml(path)
     if is_dds_config(data):
         return dds_config_from(data, str(path), expected_joints)
-    cfg = from_dict(HardwareConfig, with_g1_torque_limits(data), str(path))
+    cfg = from_dict(HardwareConfig, with_g1_joint_table(data), str(path))
     validate(cfg, str(path), expected_joints, load_motor_models())
     return cfg
 
@@ -160,6 +162,7 @@ def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...],
     unknown = [j for j in cfg.joints if j not in expected_joints]
     if unknown:
         raise ConfigError(f"{source}: unknown joints in the joint map: {', '.join(unknown)}")
+    check_within_g1_limits(cfg.joints, source)
     seen: dict[tuple[str, int], str] = {}
     for name, joint in cfg.joints.items():
         if joint.bus not in cfg.buses:

@@ -15,7 +15,6 @@ from typing import Any, TypeVar
 import yaml
 
 from hw.errors import ConfigError
-from hw.g1 import EFFORT_LIMITS
 
 T = TypeVar("T")
 
@@ -141,19 +140,6 @@ def resolve_preset(name_or_path: str, folder: Path, kind: str) -> Path:
     if not path.is_file():
         raise ConfigError(f"unknown {kind} '{name_or_path}' (available: {', '.join(preset_names(folder))}, or a path to a .yaml file)")
     return path
-
-
-def with_g1_torque_limits(data: Any) -> Any:
-    """The raw YAML with `torque_limit` filled in from `hw.g1.EFFORT_LIMITS` on every G1 joint
-    that leaves it out; anything else is left for `from_dict` to check."""
-    joints = data.get("joints") if isinstance(data, dict) else None
-    if not isinstance(joints, dict):
-        return data
-    filled = {
-        name: {"torque_limit": EFFORT_LIMITS[name], **joint} if isinstance(joint, dict) and name in EFFORT_LIMITS else joint
-        for name, joint in joints.items()
-    }
-    return {**data, "joints": filled}
 
 
 def check_position_limits(limits: tuple[float, float]) -> None:

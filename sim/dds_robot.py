@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 from hw.dds.session import DdsConfig
 from hw.emulation.g1_faults import RobotFault
 from hw.emulation.g1_lowlevel import LowLevelConfig
+from hw.g1 import CONTROL_CYCLE_HZ
 
 if TYPE_CHECKING:
     from hw.emulation.wire_audit import WireAudit
@@ -48,7 +49,7 @@ class DdsRobotConfig:
     mjcf: Path  # the G1 model (the assets' g1_mjcf)
     dds: DdsConfig = field(default_factory=DdsConfig)
     lowlevel: LowLevelConfig = field(default_factory=LowLevelConfig)
-    period_s: float = 0.002  # LowState_ every 2 ms, as the robot publishes it
+    period_s: float = 1.0 / CONTROL_CYCLE_HZ  # a LowState_ every hardware cycle (2 ms), as the robot publishes it
     duration_s: float | None = None  # None: until stopped
     motion_mode: str = "ai"  # the high-level mode active at boot; "": released, low-level commands taken at once
     truth: bool = False  # publish the simulator's state on sim/truth

@@ -2,8 +2,10 @@
 
 Actuators are rewritten as joint-space PD servos evaluated inside MuJoCo at every
 physics step (force = kp (q* - q) + kd (dq* - dq) + tau_ff, clamped to the joint's
-effort limit), so one `mj_step(nstep=10)` call runs ten 500 Hz PD updates without a
-Python round trip per step. Gains are set per command through `actuator_biasprm`.
+effort limit), so one `mj_step(nstep=n)` call runs a control tick's n PD updates without a
+Python round trip per step. Gains are set per command through `actuator_biasprm`. The
+physics step is the hardware cycle's period (`hw.g1.CONTROL_CYCLE_HZ`, 500 Hz: 2 ms): the
+simulated robot updates its PD servos as often as the real one's motors get a command.
 """
 
 from __future__ import annotations
@@ -15,12 +17,12 @@ import mujoco
 import numpy as np
 
 from hw.errors import AssetError
-from hw.g1 import EFFORT_LIMITS
+from hw.g1 import CONTROL_CYCLE_HZ, EFFORT_LIMITS
 
 
 @dataclass(frozen=True)
 class SceneConfig:
-    timestep: float = 0.002
+    timestep: float = 1.0 / CONTROL_CYCLE_HZ  # s: one physics step per hardware cycle
     floor_friction: float = 0.8
     solver_iterations: int = 50
     terrain_height: float = 0.0  # m: > 0 makes the floor uneven ground (a seeded height field), flat within 1 m of the start

@@ -40,6 +40,9 @@ class StatusLine:
         self.stream.flush()
 
 
+MEASURED_SMOOTHING_S = 0.5  # the measured velocity shown is the mean of this long: smoother than one tick's displacement
+
+
 def format_status(session: Session) -> str:
     """`t 12.3 s | run | cmd vx +0.50 vy +0.00 wz +0.00 | meas vx +0.47 vy -0.02 wz +0.01 | plan 2.8 ms`."""
     supervisor, metrics = session.supervisor, session.metrics
@@ -50,7 +53,7 @@ def format_status(session: Session) -> str:
         c = window.velocity
         parts.append(f"cmd vx {c.vx:+.2f} vy {c.vy:+.2f} wz {c.yaw_rate:+.2f}")
     if metrics.measured:
-        recent = metrics.measured[-25:]  # half a second at 50 Hz: smoother than one tick's displacement
+        recent = metrics.measured[-max(1, round(MEASURED_SMOOTHING_S * session.tracker.rate_hz)) :]
         vx, vy, wz = (sum(v[i] for v in recent) / len(recent) for i in range(3))
         parts.append(f"meas vx {vx:+.2f} vy {vy:+.2f} wz {wz:+.2f}")
     latency = session.reference.report().get("plan_latency_ms")

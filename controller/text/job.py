@@ -20,6 +20,7 @@ from controller.text.executor import TextReference, TextRunConfig, estimate_seco
 from controller.text.metrics import Embed
 from controller.text.program import Program
 from controller.text.report import Detect, text_report
+from controller.tracking.presets import policy_rate_hz
 
 SETTLE_S = 1.0  # the run goes on this long after the last clause
 MAX_SECONDS = 180.0
@@ -69,7 +70,7 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     )  # fmt: skip
     report = run_sim(sim_cfg, hooks)
     reference = holder[0]
-    text = text_report(reference, 50.0, embed, detect)
+    text = text_report(reference, policy_rate_hz(cfg.policy), embed, detect)  # one executed frame per tick of the policy
     out = {"prompt": program.prompt} | text | {"falls": report["falls"], "run": report}
     if cfg.report is not None:
         write_report(out, cfg.report)
@@ -77,9 +78,10 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
 
 
 def composed_transition_score(
-    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None
+    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None, policy: str = TextSimConfig.policy
 ) -> float | None:
-    """The transition score of `program` composed on paper (an ideal robot): blended joins, or naive ones with None."""
+    """The transition score of `program` composed on paper (an ideal robot ticked at `policy`'s rate): blended joins, or
+    naive ones with None."""
     from controller.text.kinematic import run_kinematic  # noqa: PLC0415
     from controller.text.metrics import transition_score  # noqa: PLC0415
     from controller.text.report import reference_with_boundaries  # noqa: PLC0415
@@ -87,7 +89,7 @@ def composed_transition_score(
     cfg = replace(TextRunConfig(), blend_frames=blend_frames)
     reference = TextReference(program, PlannedReference(plan, seed=seed), cfg, embed=text_embedding)
     try:
-        run_kinematic(reference, max_seconds=budget_seconds(program, reference.cfg))
+        run_kinematic(reference, policy_rate_hz(policy), max_seconds=budget_seconds(program, reference.cfg))
     finally:
         reference.close()
     frames, boundaries = reference_with_boundaries(reference)

@@ -22,8 +22,6 @@ from controller.text.executor import TextReference
 from hw import g1, quat
 from hw.types import RobotState
 
-RATE_HZ = 50.0  # the tracker's rate: the reference is read at it
-
 
 def ideal_state(sample: ReferenceSample, pose: tuple[float, float, float], velocity: VelocityCommand, t: float) -> RobotState:
     """The robot at root `pose` (x, y, heading) moving at `velocity` (heading frame), with the plan's height and joints."""
@@ -41,9 +39,10 @@ def ideal_state(sample: ReferenceSample, pose: tuple[float, float, float], veloc
     )
 
 
-def run_kinematic(reference: TextReference, max_seconds: float = 120.0, settle_s: float = 1.0) -> TextReference:
-    """Tick `reference` at the tracker's rate from standing at the origin until its program is done (or `max_seconds`)."""
-    dt = 1.0 / RATE_HZ
+def run_kinematic(reference: TextReference, rate_hz: float, max_seconds: float = 120.0, settle_s: float = 1.0) -> TextReference:
+    """Tick `reference` at `rate_hz` (the tracker's: its policy's rate) from standing at the origin until its program is
+    done (or `max_seconds`)."""
+    dt = 1.0 / rate_hz
     pose, velocity = (0.0, 0.0, 0.0), ZERO
     qpos = np.array(g1.standing_qpos())
     state = RobotState(
@@ -51,7 +50,7 @@ def run_kinematic(reference: TextReference, max_seconds: float = 120.0, settle_s
         base_ang_vel=np.zeros(3), base_pos=qpos[g1.QPOS_ROOT_POS], base_lin_vel=np.zeros(3),
     )  # fmt: skip
     reference.start(state)
-    for tick in range(round(max_seconds * RATE_HZ)):
+    for tick in range(round(max_seconds * rate_hz)):
         t = tick * dt
         x, y, heading = pose
         c, s = math.cos(heading), math.sin(heading)

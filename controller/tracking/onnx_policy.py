@@ -1,8 +1,9 @@
 """What every ONNX policy tracker reads the same way: its metadata, joint names, gains and I/O.
 
 holosoma exports describe themselves: joint names (`dof_names`), `kp`, `kd` and more are
-JSON values in the ONNX metadata. A YAML config may override gains per joint. Every
-mismatch is a `PolicyError` naming the file and what to fix.
+JSON values in the ONNX metadata. A YAML config may override gains per joint. The control
+rate is the YAML's (`rate_hz`): most exports do not carry it, and one that does (in its
+training config) must agree. Every mismatch is a `PolicyError` naming the file and what to fix.
 """
 
 from __future__ import annotations
@@ -50,6 +51,30 @@ def joint_gains(
             raise ConfigError(f"{source}: '{key}' override names unknown joint '{joint}'")
         gains[joint_names.index(joint)] = value
     return gains
+
+
+def trained_rate_hz(meta: Mapping[str, object]) -> float | None:
+    """The control rate (Hz) an export was trained at, where its metadata holds holosoma's training config
+    (`experiment_config`: the simulator's fps over its control decimation); None where it does not."""
+    config = meta.get("experiment_config")
+    for key in ("simulator", "config", "sim"):
+        config = config.get(key) if isinstance(config, dict) else None
+    if not isinstance(config, dict):
+        return None
+    fps, decimation = config.get("fps"), config.get("control_decimation")
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) and v > 0 for v in (fps, decimation)):
+        return None
+    return float(fps) / float(decimation)  # type: ignore[arg-type]
+
+
+def check_rate(meta: Mapping[str, object], rate_hz: float, path: Path, source: str) -> None:
+    """The config's control rate is the one the export was trained at, where the export says."""
+    trained = trained_rate_hz(meta)
+    if trained is not None and not math.isclose(trained, rate_hz):
+        raise ConfigError(
+            f"{source}: rate_hz {rate_hz:g} is not the rate {path.name} was trained at ({trained:g} Hz: its metadata's "
+            f"experiment_config, simulator fps / control_decimation); set rate_hz: {trained:g}"
+        )
 
 
 def check_io(

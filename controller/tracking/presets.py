@@ -18,6 +18,11 @@ def policy_config_path(name_or_path: str) -> Path:
     return resolve_preset(name_or_path, config_dir("policies"), "policy")
 
 
+def policy_rate_hz(name_or_path: str) -> float:
+    """The control rate (Hz) of a policy preset, without loading its ONNX file: what runs on paper tick at."""
+    return load_config(PolicyConfig, policy_config_path(name_or_path)).rate_hz
+
+
 def load_policy(name_or_path: str, assets: Assets, robot_joint_names: tuple[str, ...]) -> VelocityPolicy:
     """Load a policy preset and its ONNX file, checked against the robot's joints."""
     cfg_path = policy_config_path(name_or_path)

@@ -1,9 +1,9 @@
-"""The velocity tracker: an ONNX locomotion policy, robot state + velocity command -> joint PD command at 50 Hz.
+"""The velocity tracker: an ONNX locomotion policy, robot state + velocity command -> joint PD command at the policy's rate.
 
 The ONNX file describes itself: joint names, kp and kd (and, where present, the action
 scale and command ranges) live in its metadata as JSON values. The YAML config declares
-the observation layout and may override any metadata value. Every dimension and joint
-name is checked when the policy loads.
+the control rate and the observation layout and may override any metadata value. Every
+dimension and joint name is checked when the policy loads.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from controller.inputs.base import CommandLimits, VelocityCommand
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
-from controller.tracking.onnx_policy import ActionFilter, check_io, joint_gains, metadata_joint_names, read_metadata
+from controller.tracking.onnx_policy import ActionFilter, check_io, check_rate, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.tracker import Tracker
 from hw import quat
 from hw.errors import ConfigError, PolicyError
@@ -40,12 +40,12 @@ class GaitConfig:
 class PolicyConfig:
     onnx: str  # file name in the asset cache, or a path
     observation: ObservationLayout
+    rate_hz: float  # the control rate the policy was trained at: the run loop ticks at it (50 for holosoma's)
     # The pose actions are offsets from; joints not listed are 0 rad. Default: the G1 standing
     # pose the holosoma policies were trained around (hw.g1.DEFAULT_JOINT_POS).
     default_joint_pos: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_JOINT_POS))
     input_name: str = "actor_obs"  # holosoma's exported input and output names
     output_name: str = "action"
-    rate_hz: float = 50.0
     action_scale: float | None = None  # None: from metadata 'action_scale', else an error
     action_clip: float = 100.0
     gait: GaitConfig = field(default_factory=GaitConfig)
@@ -53,6 +53,10 @@ class PolicyConfig:
     kd: dict[str, float] | None = None
     damping_kd: float = DAMPING_KD
     max_consecutive_nonfinite: int = 3  # this many bad outputs in a row latch damping
+
+    def __post_init__(self) -> None:
+        if not self.rate_hz > 0:
+            raise ValueError(f"rate_hz must be positive, got {self.rate_hz}")
 
 
 class GaitClock:
@@ -95,6 +99,7 @@ class VelocityPolicy(Tracker):
         n = len(self.joint_names)
         cfg.observation.check(n, source)
         check_io(self._session, path, cfg.input_name, cfg.output_name, cfg.observation.size, n)
+        check_rate(meta, cfg.rate_hz, path, source)
         missing = [j for j in self.joint_names if j not in robot_joint_names]
         if missing:
             raise PolicyError(f"{path.name}: joints {missing} are not on the robot (robot joints: {len(robot_joint_names)})")

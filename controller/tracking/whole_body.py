@@ -1,7 +1,7 @@
 """The whole-body tracker: holosoma's whole-body tracking ONNX policy, fed the planned motion.
 
 The policy (holosoma-inference 0.1.3, `models/wbt/*_g1_29dof_dancing.onnx`, trained with
-BeyondMimic's observation contract) tracks a reference pose: each 50 Hz tick it sees the
+BeyondMimic's observation contract) tracks a reference pose: each tick (its YAML's rate_hz) it sees the
 reference's joint positions and velocities, the reference torso's rotation in the robot
 torso's frame, the pelvis gyro, the joint state relative to the default pose and its last
 action, and returns joint offsets around the default pose. Here the reference is the plan
@@ -52,7 +52,7 @@ from controller.inputs.base import CommandLimits
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
-from controller.tracking.onnx_policy import ActionFilter, check_io, joint_gains, metadata_joint_names, read_metadata
+from controller.tracking.onnx_policy import ActionFilter, check_io, check_rate, joint_gains, metadata_joint_names, read_metadata
 from controller.tracking.presets import available_policies, onnx_file, policy_config_path
 from controller.tracking.tracker import Tracker
 from hw import g1
@@ -74,12 +74,12 @@ Quat = tuple[float, float, float, float]
 class WholeBodyConfig:
     onnx: str  # file name in the asset cache, or a path
     observation: ObservationLayout
+    rate_hz: float  # the control rate the policy was trained at: the run loop ticks at it (50 for holosoma's)
     # The pose actions are offsets from (and `dof_pos` is relative to); joints not listed are 0 rad.
     default_joint_pos: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_JOINT_POS))
     input_name: str = "obs"  # holosoma's whole-body export: input 'obs', output 'actions'
     output_name: str = "actions"
     clip_input: str | None = "time_step"  # the export's index into its own clip: fed 0, its outputs unused
-    rate_hz: float = 50.0
     action_scale: float | None = None  # one scale for all joints; None: metadata 'action_scale', else effort_action_scale
     # scale_j = effort_action_scale * effort_limit_j / kp_j, kp from the metadata (the gains the policy was
     # trained with, whatever `kp` overrides say): BeyondMimic's per-joint action scale.
@@ -92,6 +92,8 @@ class WholeBodyConfig:
     anchor_body: str = g1.TORSO_BODY  # the body whose orientation is tracked; torso_link: the waist chain is computed here
 
     def __post_init__(self) -> None:
+        if not self.rate_hz > 0:
+            raise ValueError(f"rate_hz must be positive, got {self.rate_hz}")
         if self.anchor_body != g1.TORSO_BODY:
             raise ValueError(f"anchor_body must be '{g1.TORSO_BODY}' (the only anchor this tracker computes), got '{self.anchor_body}'")
 
@@ -115,6 +117,7 @@ class WholeBodyTracker(Tracker):
         n = len(self.joint_names)
         cfg.observation.check(n, source, WHOLE_BODY_TERMS)
         self._feed = self._check_io(cfg, n)
+        check_rate(meta, cfg.rate_hz, path, source)
         for joints, where in ((robot_joint_names, "on the robot"), (g1.JOINT_NAMES, "in the planned reference (the G1's joints)")):
             missing = [j for j in self.joint_names if j not in joints]
             if missing:

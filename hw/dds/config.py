@@ -1,10 +1,11 @@
 """Hardware configs of a G1 over its low-level DDS topics: `configs/hardware/g1-dds.yaml`, `sim-dds.yaml`.
 
-A DDS config (`transport: dds`) names the domain, the network interface and the topics, the
-joint limits and bring-up gains of the 29 joints, and the safety thresholds; there are no
-buses or motor ids: the robot's main board addresses the motors. `simulated: true` marks a
-config whose robot `g1ctl` starts itself (`g1ctl robot --dds` in a child process). Pure
-configuration: importing this needs no cyclonedds.
+A DDS config (`transport: dds`) names the domain, the network interface and the topics, and
+the safety thresholds; there are no buses or motor ids: the robot's main board addresses the
+motors. Each joint's limits and bring-up gains are the G1 joint table's (`hw.g1.G1_JOINTS`):
+`joints` may narrow a limit or change a gain of a joint, and a wider limit is refused.
+`simulated: true` marks a config whose robot `g1ctl` starts itself (`g1ctl robot --dds` in a
+child process). Pure configuration: importing this needs no cyclonedds.
 """
 
 from __future__ import annotations
@@ -15,14 +16,16 @@ from typing import Any, Literal
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
-from hw.yamlconfig import check_position_limits, from_dict, with_g1_torque_limits
+from hw.joint_overrides import check_within_g1_limits, with_g1_joint_table
+from hw.yamlconfig import check_position_limits, from_dict
 
 
 @dataclass(frozen=True)
 class DdsJointConfig:
     position_limits: tuple[float, float]  # rad
     velocity_limit: float  # rad/s
-    torque_limit: float  # N m; left out of the YAML it is the G1's effort limit (hw.g1.EFFORT_LIMITS)
+    torque_limit: float  # N m
+    # Left out of the YAML, each of these is the G1 joint table's (hw.g1.G1_JOINTS).
     kp: float = 20.0  # bring-up gains (soft start, sweep)
     kd: float = 1.0
 
@@ -66,11 +69,14 @@ def is_dds_config(data: Any) -> bool:
 def dds_config_from(data: Any, source: str, expected_joints: tuple[str, ...] = JOINT_NAMES) -> DdsHardwareConfig:
     """Build and check a DDS hardware config from its parsed YAML (the joint names first: a misspelt one is named as such)."""
     joints = data.get("joints") if isinstance(data, dict) else None
-    names = list(joints) if isinstance(joints, dict) else []
-    missing = [j for j in expected_joints if j not in names]
-    if isinstance(joints, dict) and missing:
-        raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
-    unknown = [j for j in names if j not in expected_joints]
+    unknown = [j for j in joints if j not in expected_joints] if isinstance(joints, dict) else []
     if unknown:
         raise ConfigError(f"{source}: unknown joints in the joint map: {', '.join(unknown)}")
-    return from_dict(DdsHardwareConfig, with_g1_torque_limits(data), source)  # torque limits default to the G1's own
+    data = with_g1_joint_table(data, every_joint=expected_joints)
+    joints = data.get("joints") if isinstance(data, dict) else None
+    missing = [j for j in expected_joints if j not in joints] if isinstance(joints, dict) else []
+    if missing:  # joints of another robot, which the G1 joint table does not hold
+        raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
+    cfg = from_dict(DdsHardwareConfig, data, source)
+    check_within_g1_limits(cfg.joints, source)
+    return cfg

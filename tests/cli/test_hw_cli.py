@@ -139,6 +139,24 @@ def test_joint_map_with_duplicate_id_is_named(tmp_path: Path) -> None:
     assert "joints missing from the joint map: right_wrist_yaw_joint" in one_line_error(g1ctl("hw", "scan", "--hardware", str(missing)))
 
 
+def test_a_joint_limit_wider_than_the_g1s_is_refused_in_one_line(tmp_path: Path) -> None:
+    knee = "left_knee_joint: {bus: can0, protocol: mit, model: sim-leg-150, reply: cubemars, id: 4"
+    text = config_dir("hardware", "sim-can.yaml").read_text()
+    assert knee in text
+    bad = tmp_path / "wide-knee.yaml"
+    bad.write_text(text.replace(knee, knee + ", position_limits: [-0.2, 3.0]"))
+    line = one_line_error(g1ctl("hw", "scan", "--hardware", str(bad)))
+    assert line.endswith(
+        f"{bad}: joints.left_knee_joint.position_limits [-0.2, 3.0] is wider than the G1's [-0.087267, 2.8798] "
+        "(hw/g1.py, from the MJCF): narrow it or remove it"
+    ), line
+    dds = tmp_path / "fast-dds.yaml"
+    text = config_dir("hardware", "sim-dds.yaml").read_text()
+    dds.write_text(text.replace("mode_pr: 0", "mode_pr: 0\njoints: {waist_yaw_joint: {velocity_limit: 40}}"))
+    line = one_line_error(g1ctl("hw", "scan", "--hardware", str(dds)))
+    assert f"{dds}: joints.waist_yaw_joint.velocity_limit 40.0 is wider than the G1's 30.0" in line, line
+
+
 def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
     report_path = tmp_path / "hw.json"
     result = g1ctl("sim", "--hardware", "sim-can", "--duration", "3", "--report", str(report_path))

@@ -10,6 +10,7 @@ from controller.inputs.scripted import Scenario
 from controller.tracking.velocity_policy import PolicyConfig
 from controller.tracking.whole_body import WholeBodyConfig
 from hw.errors import ConfigError
+from hw.g1 import CONTROL_CYCLE_HZ
 from hw.shipped import config_dir
 from hw.yamlconfig import load_config
 
@@ -23,15 +24,25 @@ def write(tmp_path: Path, text: str) -> Path:
 
 
 def test_shipped_policy_configs_load() -> None:
-    """Locomotion presets (100 observation values) and whole-body tracking presets (wbt_*, 154)."""
+    """Locomotion presets (100 observation values) and whole-body tracking presets (wbt_*, 154), each with its rate."""
     paths = sorted(POLICY_DIR.glob("*.yaml"))
     whole_body = [p for p in paths if p.name.startswith("wbt_")]
     assert whole_body and len(whole_body) < len(paths)
     for path in paths:
-        if path in whole_body:
-            assert load_config(WholeBodyConfig, path).observation.size == 154
-        else:
-            assert load_config(PolicyConfig, path).observation.size == 100
+        cfg = load_config(WholeBodyConfig, path) if path in whole_body else load_config(PolicyConfig, path)
+        assert cfg.observation.size == (154 if path in whole_body else 100)
+        assert (CONTROL_CYCLE_HZ / cfg.rate_hz).is_integer(), path  # a tick is a whole number of hardware cycles (physics steps)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"), [("rate_hz: 50", "missing required key 'rate_hz'"), ("rate_hz: 0", "rate_hz must be positive")]
+)
+def test_the_policy_states_a_positive_rate(tmp_path: Path, edit: str, message: str) -> None:
+    text = (POLICY_DIR / "fastsac.yaml").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("rate_hz:"))
+    path = write(tmp_path, text.replace(line, "" if edit == "rate_hz: 50" else edit))
+    with pytest.raises(ConfigError, match=message):
+        load_config(PolicyConfig, path)
 
 
 def test_unknown_key_names_file_and_dotted_key(tmp_path: Path) -> None:

@@ -36,12 +36,38 @@ def test_can_ids_must_fit_the_reply_byte(tmp_path: Path, reply: str, motor_id: i
         load_hardware_config(str(path))
 
 
-def test_g1_joints_without_a_torque_limit_take_the_g1_effort_limit(tmp_path: Path) -> None:
-    cfg = load_hardware_config(str(SIM_CAN))
-    assert {name: joint.torque_limit for name, joint in cfg.joints.items()} == g1.EFFORT_LIMITS
+@pytest.mark.parametrize("name", ["sim-can", "sim-mixed"])
+def test_g1_joints_take_the_joint_tables_limits_and_gains(name: str) -> None:
+    cfg = load_hardware_config(name)
+    for joint in g1.G1_JOINTS:
+        got = cfg.joints[joint.name]
+        stated = (got.position_limits, got.velocity_limit, got.torque_limit, got.kp, got.kd)
+        assert stated == (joint.position_limits, joint.velocity_limit, joint.effort_limit, joint.kp, joint.kd), joint.name
     assert cfg.safety.damping_kd == g1.DAMPING_KD
-    path = _variant(tmp_path, HIP_PITCH + ", torque_limit: 40.0")
-    assert load_hardware_config(str(path)).joints["left_hip_pitch_joint"].torque_limit == 40.0  # a config's own limit wins
+
+
+def test_a_joint_may_narrow_a_limit_and_change_its_gains(tmp_path: Path) -> None:
+    path = _variant(tmp_path, HIP_PITCH + ", position_limits: [-1.0, 1.5], velocity_limit: 10, torque_limit: 40.0, kp: 60, kd: 3")
+    hip = load_hardware_config(str(path)).joints["left_hip_pitch_joint"]
+    assert (hip.position_limits, hip.velocity_limit, hip.torque_limit, hip.kp, hip.kd) == ((-1.0, 1.5), 10.0, 40.0, 60.0, 3.0)
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("position_limits: [-2.6, 2.0]", "position_limits [-2.6, 2.0] is wider than the G1's [-2.5307, 2.8798] (hw/g1.py, from the MJCF)"),
+        ("position_limits: [-1.0, 2.88]", "position_limits [-1.0, 2.88] is wider than the G1's [-2.5307, 2.8798]"),
+        ("torque_limit: 100", "torque_limit 100.0 is wider than the G1's 88.0 (hw/g1.py, the MJCF's actuatorfrcrange)"),
+        ("velocity_limit: 31", "velocity_limit 31.0 is wider than the G1's 30.0 (hw/g1.py, COMMAND_VELOCITY_LIMIT)"),
+    ],
+)
+def test_a_limit_wider_than_the_joint_tables_is_refused(tmp_path: Path, override: str, message: str) -> None:
+    path = _variant(tmp_path, f"{HIP_PITCH}, {override}")
+    with pytest.raises(ConfigError) as caught:
+        load_hardware_config(str(path))
+    line = str(caught.value)
+    assert line.startswith(f"{path}: joints.left_hip_pitch_joint.") and message in line, line
+    assert line.endswith("narrow it or remove it") and "\n" not in line
 
 
 def test_a_joint_of_another_robot_must_state_its_torque_limit(tmp_path: Path) -> None:

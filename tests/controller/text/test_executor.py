@@ -14,6 +14,7 @@ from controller.text.kinematic import run_kinematic
 from controller.text.metrics import transition_score
 from controller.text.program import Clause, Motion, Program, Waypoint
 from controller.text.report import reference_with_boundaries
+from controller.tracking.presets import policy_rate_hz
 
 PROGRAM = Program(
     "walk forward a meter, then turn left 90 degrees, then wave",
@@ -34,7 +35,7 @@ def planner() -> Planner:
 
 def _run(planner: Planner, blend: int | None) -> TextReference:
     reference = TextReference(PROGRAM, PlannedReference(planner.plan), TextRunConfig(blend_frames=blend))
-    run_kinematic(reference, max_seconds=60.0)
+    run_kinematic(reference, policy_rate_hz("fastsac"), max_seconds=60.0)
     reference.close()
     return reference
 

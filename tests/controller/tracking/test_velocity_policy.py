@@ -34,7 +34,8 @@ LAYOUT = ObservationLayout(
 
 
 def config(onnx: str = "tiny.onnx", **kwargs: object) -> PolicyConfig:
-    base: dict[str, object] = {"onnx": onnx, "observation": LAYOUT, "default_joint_pos": {"left_knee_joint": 0.5}, "action_scale": 0.25}
+    base: dict[str, object] = {"onnx": onnx, "observation": LAYOUT, "rate_hz": 50.0, "default_joint_pos": {"left_knee_joint": 0.5}}
+    base["action_scale"] = 0.25
     base.update(kwargs)
     return PolicyConfig(**base)  # type: ignore[arg-type]
 

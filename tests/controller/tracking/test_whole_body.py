@@ -22,6 +22,7 @@ from hw import g1
 from hw import quat as quaternion
 from hw.errors import ConfigError, PolicyError
 from hw.g1 import EFFORT_LIMITS, JOINT_NAMES
+from hw.shipped import config_dir
 from hw.types import RobotState
 
 N = len(JOINT_NAMES)
@@ -77,7 +78,7 @@ def make_wbt_onnx(
 
 
 def config(**kwargs: object) -> WholeBodyConfig:
-    base: dict[str, object] = {"onnx": "tiny.onnx", "observation": LAYOUT, "default_joint_pos": {"left_knee_joint": 0.5}}
+    base: dict[str, object] = {"onnx": "tiny.onnx", "observation": LAYOUT, "rate_hz": 50.0, "default_joint_pos": {"left_knee_joint": 0.5}}
     base.update(kwargs)
     if "action_scale" not in base and "effort_action_scale" not in base:
         base["action_scale"] = 0.5
@@ -337,6 +338,24 @@ def test_corrupt_onnx_file_is_one_clear_error(tmp_path: Path) -> None:
     bad.write_bytes(b"not a protobuf")
     with pytest.raises(PolicyError, match="cannot load ONNX policy"):
         WholeBodyTracker(bad, config(), JOINT_NAMES)
+
+
+def test_a_rate_other_than_the_exports_training_rate_is_refused(tmp_path: Path) -> None:
+    trained = {"experiment_config": {"simulator": {"config": {"sim": {"fps": 200, "control_decimation": 4}}}}}
+    assert tracker(tmp_path, metadata=trained).rate_hz == 50.0
+    with pytest.raises(ConfigError, match=r"rate_hz 60 is not the rate tiny.onnx was trained at \(50 Hz: .*\); set rate_hz: 50"):
+        tracker(tmp_path, metadata=trained, rate_hz=60.0)
+    assert tracker(tmp_path, rate_hz=60.0).rate_hz == 60.0  # an export that does not say: the config's rate
+
+
+def test_the_shipped_wbt_ppo_rate_is_its_exports(assets, tmp_path: Path) -> None:
+    """The one holosoma export that records its training config (wbt_ppo) agrees with its preset's rate_hz."""
+    text = (config_dir("policies") / "wbt_ppo.yaml").read_text()
+    assert load_whole_body("wbt_ppo", assets, JOINT_NAMES).rate_hz == 50.0
+    wrong = tmp_path / "wbt_ppo_100hz.yaml"
+    wrong.write_text(text.replace("rate_hz: 50", "rate_hz: 100", 1))  # the export is still the cached one
+    with pytest.raises(ConfigError, match=f"{wrong}: rate_hz 100 is not the rate ppo_g1_29dof_dancing.onnx was trained at"):
+        load_whole_body(str(wrong), assets, JOINT_NAMES)
 
 
 # -- presets and the registry ------------------------------------------------------------------
