@@ -35,7 +35,14 @@ HARDWARE_PATH_MODULES = (
     "controller.cli.hw",
 )
 # Folders whose every module must load without mujoco or torch (reference: where it exists).
-SIM_FREE_FOLDERS = ("controller/tracking", "controller/reference", "controller/inputs", "controller/planner", "controller/text")
+SIM_FREE_FOLDERS = (
+    "controller/commands",
+    "controller/tracking",
+    "controller/reference",
+    "controller/inputs",
+    "controller/planner",
+    "controller/text",
+)
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
 # own firmware, so it may share the pure protocol codecs, never the host's drivers.

@@ -28,11 +28,11 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
+from controller.commands.gestures import GesturePlayer
+from controller.commands.velocity import VelocityCommand
 from controller.eval.executor import Executor, TaskLost
-from controller.inputs.base import VelocityCommand
 from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
 from controller.motion_data.dataset import FPS, MotionClip, episode_seed, minutes_per_split, save_dataset, split_for_seed
-from controller.motion_data.gestures import GesturePlayer
 from controller.reference.window import ReferenceWindow
 from controller.tracking.presets import load_policy
 from controller.tracking.velocity_policy import VelocityPolicy

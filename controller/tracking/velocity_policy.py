@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.inputs.base import CommandLimits, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
