@@ -28,7 +28,7 @@ from hw.g1 import JOINT_NAMES, STANDING_PELVIS_HEIGHT, default_joint_vector
 from tests.conftest import ROOT, g1ctl, one_line_error
 
 if TYPE_CHECKING:
-    from controller.motion_data.recorder import Recorder
+    from controller.eval.dataset_recorder import Recorder
 
 # The g1-moves clips sit beside the repository (../shared/data/g1-moves), or where G1_MOVES_DIR says.
 G1_MOVES = Path(os.environ.get("G1_MOVES_DIR", ROOT.parent / "shared" / "data" / "g1-moves"))
@@ -314,14 +314,14 @@ def test_foot_contacts_and_frame_sampling(g1_model: Any) -> None:
 
 @pytest.fixture(scope="module")
 def recorder() -> Recorder:
-    from controller.motion_data.recorder import Recorder
+    from controller.eval.dataset_recorder import Recorder
 
     return Recorder("fastsac", None)
 
 
 def test_record_a_short_dataset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, recorder: Recorder) -> None:
-    from controller.motion_data import recorder as dataset_record
-    from controller.motion_data.recorder import RecordConfig, record
+    from controller.eval import dataset_recorder as dataset_record
+    from controller.eval.dataset_recorder import RecordConfig, record
 
     monkeypatch.setattr(dataset_record, "Recorder", lambda policy, assets_dir: recorder)
     report = record(RecordConfig(out=tmp_path / "rec", minutes=0.2, seed=4, episode_seconds=(4.0, 6.0)))
@@ -401,7 +401,7 @@ def test_cli_mistakes_are_one_line(tmp_path: Path) -> None:
 @pytest.mark.slow  # a local Ray instance
 def test_recording_on_two_ray_workers_writes_the_same_clips(tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="the eval extra (ray) is not installed")
-    from controller.motion_data.recorder import RecordConfig, record
+    from controller.eval.dataset_recorder import RecordConfig, record
 
     common = {"minutes": 0.25, "seed": 6, "episode_seconds": (3.0, 5.0)}
     alone = record(RecordConfig(out=tmp_path / "one", **common))  # type: ignore[arg-type]

@@ -9,7 +9,8 @@ blended in and out over 0.5 s with a smoothstep. The state is sampled at 30 fps 
 and one caption per segment. Episodes last 60-120 s, each with its own seed; after a fall,
 the last 2 s before it are dropped and a new episode starts.
 
-Imports MuJoCo (through `sim`).
+An application above the dataset it writes (`motion_data`): like the evaluation suites it
+drives whole runs as seeded tasks on `executor`, so it sits beside them. Imports MuJoCo (through `sim`).
 """
 
 from __future__ import annotations
