@@ -10,7 +10,7 @@ from hw import g1
 from hw.types import JointCommand
 from sim.robot import SimRobot
 
-GRAVITY = 9.81
+GRAVITY_MPS2 = 9.81
 
 
 class MuJoCoPlant:
@@ -54,7 +54,7 @@ class MuJoCoPlant:
         w, x, y, z = d.qpos[g1.QPOS_ROOT_QUAT].tolist()
         # Specific force of a body at rest: gravity reaction rotated into the IMU frame.
         gx, gy, gz = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
-        return (w, x, y, z), tuple(d.qvel[g1.QVEL_ROOT_ANG].tolist()), (gx * GRAVITY, gy * GRAVITY, gz * GRAVITY)
+        return (w, x, y, z), tuple(d.qvel[g1.QVEL_ROOT_ANG].tolist()), (gx * GRAVITY_MPS2, gy * GRAVITY_MPS2, gz * GRAVITY_MPS2)
 
     def step(self) -> None:
         with self.lock:

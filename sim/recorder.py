@@ -1,6 +1,6 @@
 """Physics side of motion dataset recording: foot contacts from MuJoCo, and state sampled at a frame rate.
 
-The orchestration (policy, command programs, gestures) lives in `controller.motion_data.recorder`;
+The orchestration (policy, command programs, gestures) lives in `controller.eval.dataset_recorder`;
 this module only reads the simulated G1.
 """
 

@@ -35,7 +35,14 @@ HARDWARE_PATH_MODULES = (
     "controller.cli.hw",
 )
 # Folders whose every module must load without mujoco or torch (reference: where it exists).
-SIM_FREE_FOLDERS = ("controller/tracking", "controller/reference", "controller/inputs", "controller/planner", "controller/text")
+SIM_FREE_FOLDERS = (
+    "controller/commands",
+    "controller/tracking",
+    "controller/reference",
+    "controller/inputs",
+    "controller/planner",
+    "controller/text",
+)
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
 # own firmware, so it may share the pure protocol codecs, never the host's drivers.
@@ -43,6 +50,23 @@ HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback
 
 # `controller/` keeps its code in role folders; only these modules sit at its top level.
 CONTROLLER_TOP_LEVEL = {"__init__", "assets", "reports", "onnx_session"}
+
+# The layer order of controller/, lowest first: a folder imports from folders of lower layers only, never
+# from its own layer's other folders nor from above. The top-level modules are the ground floor.
+CONTROLLER_LAYERS: tuple[tuple[str, ...], ...] = (
+    ("assets", "reports", "onnx_session"),  # controller/'s top-level modules
+    ("commands", "planner"),  # the command vocabulary; the planner contract and its runtime
+    ("inputs", "motion_data", "reference"),  # command sources; the motion dataset; what a tracker follows
+    ("tracking",),  # trackers: reference window in, joint command out
+    ("runtime",),  # sessions, backends, whole sim and robot runs
+    ("eval", "text"),  # applications that drive runs: suites and the dataset recorder; prompts run as programs
+    ("training",),
+    ("bench",),
+    ("cli",),
+)
+
+# Names that once meant two things in different modules (issue 20): each stays defined by one module at most.
+SPLIT_NAMES = ("Waypoint", "Episode", "GESTURES", "ROOT_BODY", "GRAVITY", "_LEGS", "_ARMS", "_LEFT_ARM")
 
 
 def python_files(folder: str) -> list[Path]:
@@ -91,6 +115,86 @@ def direct_imports_of(forbidden: tuple[str, ...], folders: Iterable[str], allowe
             hits = sorted(n for n in imported_modules(path) if matches(n, forbidden))
             if hits:
                 found[rel] = hits
+    return found
+
+
+# An import between two parts of controller/: (importing file, its part, the imported part, the imported module).
+ControllerImport = tuple[str, str, str, str]
+
+
+def controller_part(name: str) -> str | None:
+    """The role folder (or top-level module) of controller/ that a dotted name is in; None outside it."""
+    parts = name.split(".")
+    return parts[1] if parts[0] == "controller" and len(parts) > 1 else None
+
+
+def controller_imports() -> list[ControllerImport]:
+    """Every import of one part of controller/ by another, one per file and imported part (the module it names)."""
+    found: dict[tuple[str, str], ControllerImport] = {}
+    for path in python_files("controller"):
+        here = controller_part(module_name(path))
+        rel = path.relative_to(ROOT).as_posix()
+        for name in sorted(imported_modules(path), key=len):
+            there = controller_part(name)
+            if here is not None and there is not None and there != here:
+                found.setdefault((rel, there), (rel, here, there, name))
+    return sorted(found.values())
+
+
+def layer_violations(imports: Iterable[ControllerImport]) -> list[str]:
+    """The imports against CONTROLLER_LAYERS, each named with its file."""
+    layer = {part: i for i, parts in enumerate(CONTROLLER_LAYERS) for part in parts}
+    return [
+        f"{file} imports {name}: {here} (layer {layer.get(here)}) may import only from layers below it, {there} is layer {layer.get(there)}"
+        for file, here, there, name in imports
+        if here not in layer or there not in layer or layer[there] >= layer[here]
+    ]
+
+
+def import_cycles(imports: Iterable[ControllerImport]) -> list[str]:
+    """Groups of controller/ parts that import each other round a cycle, each folder import in them named by one file."""
+    first: dict[tuple[str, str], str] = {}
+    for file, here, there, name in imports:
+        first.setdefault((here, there), f"{file} imports {name}")
+    edges: dict[str, set[str]] = {}
+    for here, there in first:
+        edges.setdefault(here, set()).add(there)
+
+    def reachable(start: str) -> set[str]:
+        seen: set[str] = set()
+        todo = [start]
+        while todo:
+            for nxt in edges.get(todo.pop(), ()):
+                if nxt not in seen:
+                    seen.add(nxt)
+                    todo.append(nxt)
+        return seen
+
+    reach = {part: reachable(part) for part in edges}
+    groups = {frozenset(m for m in reach if m in reach[part] and part in reach[m]) for part in reach if part in reach[part]}
+    return [
+        ", ".join(sorted(group))
+        + ": "
+        + "; ".join(f"{here} -> {there} ({why})" for (here, there), why in sorted(first.items()) if here in group and there in group)
+        for group in sorted(groups, key=sorted)
+    ]
+
+
+def top_level_definitions(folders: Iterable[str]) -> dict[str, list[str]]:
+    """Name -> the files that define it at module level (class, function or assignment)."""
+    found: dict[str, list[str]] = {}
+    for folder in folders:
+        for path in python_files(folder):
+            for node in ast.parse(path.read_text(), str(path)).body:
+                if isinstance(node, ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
+                    names = [node.name]
+                elif isinstance(node, ast.Assign | ast.AnnAssign):
+                    targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                    names = [n.id for t in targets for n in (t.elts if isinstance(t, ast.Tuple) else [t]) if isinstance(n, ast.Name)]
+                else:
+                    continue
+                for name in names:
+                    found.setdefault(name, []).append(path.relative_to(ROOT).as_posix())
     return found
 
 
@@ -157,6 +261,53 @@ def test_firmware_emulators_use_no_host_driver() -> None:
 def test_controller_top_level_keeps_few_modules() -> None:
     top = {p.stem for p in (ROOT / "controller").glob("*.py")}
     assert top <= CONTROLLER_TOP_LEVEL, f"new top-level modules {sorted(top - CONTROLLER_TOP_LEVEL)}: put them in a role folder"
+
+
+def test_every_controller_folder_has_a_layer() -> None:
+    parts = {p.name for p in (ROOT / "controller").iterdir() if p.is_dir() and any(p.glob("*.py"))}
+    parts |= {p.stem for p in (ROOT / "controller").glob("*.py")} - {"__init__"}
+    layered = [part for layer in CONTROLLER_LAYERS for part in layer]
+    assert len(layered) == len(set(layered)), f"a part is in two layers: {sorted(p for p in layered if layered.count(p) > 1)}"
+    assert parts == set(layered), (
+        f"give {sorted(parts - set(layered))} a layer in CONTROLLER_LAYERS; {sorted(set(layered) - parts)} are gone"
+    )
+
+
+def test_the_layer_checks_name_the_imports_that_break_them() -> None:
+    """The cycle between inputs and motion_data that the command vocabulary removed, as the checks report it."""
+    before = [
+        ("controller/inputs/scripted.py", "inputs", "motion_data", "controller.motion_data.dataset"),
+        ("controller/motion_data/command_programs.py", "motion_data", "inputs", "controller.inputs.base"),
+        ("controller/tracking/tracker.py", "tracking", "reference", "controller.reference.window"),
+    ]
+    violations = layer_violations(before)
+    assert len(violations) == 2
+    assert violations[0].startswith("controller/inputs/scripted.py imports controller.motion_data.dataset: inputs (layer 2)")
+    assert import_cycles(before) == [
+        "inputs, motion_data: inputs -> motion_data (controller/inputs/scripted.py imports controller.motion_data.dataset); "
+        "motion_data -> inputs (controller/motion_data/command_programs.py imports controller.inputs.base)"
+    ]
+
+
+def test_controller_folders_import_only_from_lower_layers() -> None:
+    imports = controller_imports()
+    assert ("controller/tracking/tracker.py", "tracking", "reference", "controller.reference.window") in imports
+    violations = layer_violations(imports)
+    assert not violations, "imports against CONTROLLER_LAYERS:\n" + "\n".join(violations)
+
+
+def test_no_import_cycle_between_controller_folders() -> None:
+    cycles = import_cycles(controller_imports())
+    assert not cycles, "controller/ folders importing each other round a cycle:\n" + "\n".join(cycles)
+
+
+def test_names_that_meant_two_things_stay_split() -> None:
+    """A generic check cannot tell a restated name (FloatArray, each CLI module's `run`) from one with two
+    meanings, so only the names that were split are held to one defining module."""
+    definitions = top_level_definitions(PACKAGES)
+    assert "hw/g1.py" in definitions["ROOT_BODY"] and "controller/planner/encoding.py" in definitions["_LEGS"]  # tuple targets too
+    doubled = {name: definitions[name] for name in SPLIT_NAMES if len(definitions.get(name, [])) > 1}
+    assert doubled == {}, f"defined by more than one module, with different meanings before: {doubled}"
 
 
 def test_no_test_module_imports_from_another_test_module() -> None:

@@ -22,7 +22,7 @@ FloatArray = NDArray[np.float64]
 CONTACT_HEIGHT_M = 0.05  # the rule of sim.kinematics.foot_contacts, restated here without MuJoCo
 REACH_POSITION_M = 0.05
 REACH_HEADING_RAD = np.deg2rad(15.0)
-ROOT_BODY = 0
+ROOT_BODY_INDEX = 0  # the pelvis in the body axis B (hw.g1.ROOT_BODY names it)
 
 
 def l2p(pred_pos: ArrayLike, true_pos: ArrayLike) -> float:
@@ -94,7 +94,7 @@ def joint_jitter(pos: ArrayLike, fps: float = FPS) -> float:
 def root_jitter(pos: ArrayLike, fps: float = FPS) -> float:
     """Mean acceleration magnitude (m/s^2) of the root body (the pelvis)."""
     p = np.asarray(pos, dtype=np.float64)
-    return float(acceleration(p[..., ROOT_BODY : ROOT_BODY + 1, :], fps).mean())
+    return float(acceleration(p[..., ROOT_BODY_INDEX : ROOT_BODY_INDEX + 1, :], fps).mean())
 
 
 def keyframe_error(pred_pos: ArrayLike, true_pos: ArrayLike) -> FloatArray:

@@ -42,8 +42,8 @@ def run(args: argparse.Namespace) -> int:
 
         print(json.dumps(dataset_summary(args.path), indent=2))
         return 0
+    from controller.eval import dataset_recorder as dataset_record  # noqa: PLC0415 - imports MuJoCo
     from controller.motion_data import csv_import  # noqa: PLC0415
-    from controller.motion_data import recorder as dataset_record  # noqa: PLC0415 - imports MuJoCo
 
     if args.dataset_command == "record":
         cfg = dataset_record.RecordConfig(

@@ -64,7 +64,7 @@ def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | No
     """`--remote`: the remote's bytes by time, as a host reading them with `--input unitree-remote` gets the command back."""
     if name is None:
         return None
-    from controller.inputs.base import CommandLimits  # noqa: PLC0415
+    from controller.commands.velocity import CommandLimits  # noqa: PLC0415
     from controller.inputs.unitree_remote import remote_bytes, remote_feed  # noqa: PLC0415
 
     limits = CommandLimits()  # the sticks carry fractions of these; a host scales them by its policy's ranges (the shipped ones: these)

@@ -22,7 +22,7 @@ from tqdm import tqdm
 from controller.eval.executor import Executor, TaskLost
 from controller.eval.html import write_html
 from controller.eval.stats import push_curves, summarize
-from controller.eval.suite import Episode, SuiteConfig, episodes
+from controller.eval.suite import EpisodeSpec, SuiteConfig, episodes
 from controller.reports import write_report
 from sim.perturbations import Perturbations
 
@@ -49,7 +49,7 @@ def episode_cpus(hardware: str) -> int:
     return 2 if isinstance(load_robot_config(hardware), DdsHardwareConfig) else 1
 
 
-def run_episode(episode: Episode, assets_dir: str | None = None) -> dict[str, Any]:
+def run_episode(episode: EpisodeSpec, assets_dir: str | None = None) -> dict[str, Any]:
     """One episode on the simulator; any exception is the episode's failure, reported, not raised."""
     from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
     from controller.runtime.sim_run import run  # noqa: PLC0415 - MuJoCo, in the worker

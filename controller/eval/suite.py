@@ -5,7 +5,7 @@ configs, perturbation conditions (a shipped set by name, or inline values, any o
 drawn per episode from its seed), fault drills (plans
 of `configs/faults/`, each on the simulated hardware it is written for) and seeds; pass
 criteria may hold per condition, and every drill carries its own (what the plan expects). Every
-combination is an `Episode` with a stable id, so a report lists each episode's seed and result
+combination is an `EpisodeSpec` with a stable id, so a report lists each episode's seed and result
 and an interrupted sweep knows what is done.
 """
 
@@ -58,7 +58,9 @@ class SuiteConfig:
 
 
 @dataclass(frozen=True)
-class Episode:
+class EpisodeSpec:
+    """One combination of the suite, to run (`runner.run_episode`): its seed and its drawn perturbations."""
+
     scenario: str
     policy: str
     planner: bool
@@ -122,7 +124,7 @@ def fault_plans(cfg: SuiteConfig) -> dict[str, tuple[str, str]]:
     return plans
 
 
-def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
+def episodes(cfg: SuiteConfig, source: str = "suite") -> list[EpisodeSpec]:
     """Every combination, seeds innermost, in a fixed order: the perturbed conditions, then the drills."""
     conditions = {label: _Condition.of(label, value, source) for label, value in cfg.perturbations.items()}
     drills = fault_plans(cfg)
@@ -139,11 +141,13 @@ def episodes(cfg: SuiteConfig, source: str = "suite") -> list[Episode]:
 
     loops = [(t, p) for t, p in itertools.product(cfg.trackers, cfg.planner) if p or t not in PLAN_FOLLOWING]
     perturbed = [
-        Episode(sc, pol, planner, hw, label, conditions[label].draw(seed), seed, cfg.duration_s, randomized=randomized[label], tracker=t)
+        EpisodeSpec(
+            sc, pol, planner, hw, label, conditions[label].draw(seed), seed, cfg.duration_s, randomized=randomized[label], tracker=t
+        )
         for sc, pol, (t, planner), hw, label, seed in itertools.product(cfg.scenarios, cfg.policies, loops, cfg.hardware, conditions, seeds)
     ]
     drilled = [
-        Episode(sc, pol, planner, drills[label][1], label, Perturbations(), seed, cfg.duration_s, faults=drills[label][0], tracker=t)
+        EpisodeSpec(sc, pol, planner, drills[label][1], label, Perturbations(), seed, cfg.duration_s, faults=drills[label][0], tracker=t)
         for sc, pol, (t, planner), label, seed in itertools.product(cfg.scenarios, cfg.policies, loops, drills, seeds)
     ]
     if not perturbed and not drilled:

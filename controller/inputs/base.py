@@ -8,17 +8,7 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Self
 
-
-@dataclass(frozen=True)
-class VelocityCommand:
-    """Planar base velocity in the robot's heading frame: vx forward, vy left (m/s), yaw rate (rad/s)."""
-
-    vx: float = 0.0
-    vy: float = 0.0
-    yaw_rate: float = 0.0
-
-    def is_zero(self, tol: float = 1e-3) -> bool:
-        return abs(self.vx) < tol and abs(self.vy) < tol and abs(self.yaw_rate) < tol
+from controller.commands.velocity import ZERO, VelocityCommand
 
 
 @dataclass(frozen=True)
@@ -34,29 +24,10 @@ class Buttons:
 class CommandSample:
     """What an input says at one instant. `alive` is False when the device went stale or away."""
 
-    velocity: VelocityCommand = VelocityCommand()
+    velocity: VelocityCommand = ZERO
     buttons: Buttons = Buttons()
     alive: bool = True
-    gesture: str = ""  # an upper-body gesture asked for (a name of motion_data.dataset.GESTURES); "" for none
-
-
-ZERO = VelocityCommand()
-
-
-@dataclass(frozen=True)
-class CommandLimits:
-    """Largest magnitudes a command may reach (the policy's trained ranges)."""
-
-    vx: tuple[float, float] = (-1.0, 1.0)
-    vy: tuple[float, float] = (-1.0, 1.0)
-    yaw_rate: tuple[float, float] = (-1.0, 1.0)
-
-    def clamp(self, cmd: VelocityCommand) -> VelocityCommand:
-        return VelocityCommand(
-            vx=min(max(cmd.vx, self.vx[0]), self.vx[1]),
-            vy=min(max(cmd.vy, self.vy[0]), self.vy[1]),
-            yaw_rate=min(max(cmd.yaw_rate, self.yaw_rate[0]), self.yaw_rate[1]),
-        )
+    gesture: str = ""  # an upper-body gesture asked for (a name of commands.gestures.GESTURE_LABELS); "" for none
 
 
 class CommandSource(abc.ABC):

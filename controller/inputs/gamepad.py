@@ -18,7 +18,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.inputs.base import Buttons, CommandSample, CommandSource
 from hw.errors import InputDeviceError
 
 log = logging.getLogger(__name__)

@@ -19,7 +19,8 @@ import threading
 import tty
 from dataclasses import dataclass, field, replace
 
-from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.inputs.base import Buttons, CommandSample, CommandSource
 from hw.errors import InputDeviceError
 
 log = logging.getLogger(__name__)

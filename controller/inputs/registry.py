@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from controller.inputs.base import CommandLimits, CommandSource
+from controller.commands.velocity import CommandLimits
+from controller.inputs.base import CommandSource
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
 

@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.inputs.base import CommandLimits, CommandSample, CommandSource, VelocityCommand
-from controller.motion_data.dataset import GESTURES
+from controller.commands.gestures import GESTURE_LABELS
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.commands.waypoints import WorldWaypoint
+from controller.inputs.base import CommandSample, CommandSource
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import load_config, preset_names
@@ -24,20 +26,11 @@ class ScenarioStep:
     vy: float = 0.0
     yaw_rate: float = 0.0
     label: str = ""
-    gesture: str = ""  # one of motion_data.dataset.GESTURES (not "none"); "" for none
+    gesture: str = ""  # one of commands.gestures.GESTURE_LABELS (not "none"); "" for none
 
     def __post_init__(self) -> None:
-        if self.gesture and (self.gesture not in GESTURES or self.gesture == "none"):
-            raise ValueError(f"unknown gesture '{self.gesture}' (valid: {', '.join(g for g in GESTURES if g != 'none')})")
-
-
-@dataclass(frozen=True)
-class Waypoint:
-    """A root pose to go to: position (m, world frame) and heading (degrees, counter-clockwise from +x)."""
-
-    x: float
-    y: float
-    heading_deg: float = 0.0
+        if self.gesture and (self.gesture not in GESTURE_LABELS or self.gesture == "none"):
+            raise ValueError(f"unknown gesture '{self.gesture}' (valid: {', '.join(g for g in GESTURE_LABELS if g != 'none')})")
 
 
 @dataclass(frozen=True)
@@ -61,7 +54,7 @@ class Scenario:
     description: str = ""
     steps: tuple[ScenarioStep, ...] = ()
     random: RandomProgram | None = None
-    waypoints: tuple[Waypoint, ...] = ()  # go to each in order, settling at each (planner runs); steps may add gestures
+    waypoints: tuple[WorldWaypoint, ...] = ()  # go to each in order, settling at each (planner runs); steps may add gestures
 
     def __post_init__(self) -> None:
         if self.duration <= 0:

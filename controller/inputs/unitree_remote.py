@@ -16,7 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.inputs.base import Buttons, CommandSample, CommandSource
 from controller.inputs.gamepad import apply_deadzone
 from hw.dds import cdr, require_cyclonedds
 from hw.dds.session import DdsConfig, DdsSession

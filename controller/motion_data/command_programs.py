@@ -11,9 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.inputs.base import CommandLimits, VelocityCommand
-from controller.motion_data.dataset import GESTURES
-from controller.motion_data.gestures import BLEND_S, smoothstep, with_gesture
+from controller.commands.gestures import BLEND_S, GESTURE_LABELS, smoothstep
+from controller.commands.velocity import CommandLimits, VelocityCommand
 
 # --- command programs --------------------------------------------------------------------------
 
@@ -36,6 +35,30 @@ SEGMENT_KINDS: dict[str, float] = {  # kind -> weight
 }
 GESTURE_SHARE = 0.55  # share of segments with a gesture
 GESTURE_KEEP = 0.35  # chance a segment keeps the previous segment's gesture
+
+
+GESTURE_PHRASES: dict[str, str] = {
+    "wave": "waving the right hand",
+    "raise_left": "with the left arm raised",
+    "raise_right": "with the right arm raised",
+    "raise_both": "with both arms raised",
+    "reach": "reaching forward with the right hand",
+    "point": "pointing to the front right",
+    "arms_crossed": "with arms crossed",
+    "hands_on_hips": "with hands on hips",
+    "wave_left": "waving the left hand",
+    "wave_both": "waving both hands",
+}
+
+
+def with_gesture(caption: str, gesture: int) -> str:
+    """'walk forward slowly' + wave -> 'walk forward slowly while waving the right hand'."""
+    if gesture == 0:
+        return caption
+    phrase = GESTURE_PHRASES[GESTURE_LABELS[gesture]]
+    if phrase.startswith("with "):
+        return f"{caption} {phrase}"
+    return f"{caption} and {phrase}" if " while " in caption else f"{caption} while {phrase}"
 
 
 @dataclass(frozen=True)
@@ -125,7 +148,7 @@ def command_program(rng: np.random.Generator, duration: float, limits: CommandLi
         if prev_gesture and rng.random() < GESTURE_KEEP:
             gesture = prev_gesture
         elif rng.random() < GESTURE_SHARE:
-            gesture = int(rng.integers(1, len(GESTURES)))
+            gesture = int(rng.integers(1, len(GESTURE_LABELS)))
         else:
             gesture = 0
         segments.append(Segment(t, length, kind, prev_cmd, cmd, ramp, gesture, with_gesture(caption, gesture)))

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.commands.gestures import GESTURE_LABELS
 from controller.planner.request import FPS  # clips are at the planner contract's frame rate
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES, NUM_JOINTS, QPOS_SIZE
@@ -46,21 +47,6 @@ MANIFEST = "manifest.json"
 SPLITS = ("train", "val", "test")
 QPOS_LAYOUT = "root position xyz (m, z up), root quaternion w,x,y,z, 29 joint angles (rad) in joint_names order"
 EPISODES_PER_RUN_SEED = 1000
-
-# Index 0 is "no gesture": the policy's own arm and waist targets.
-GESTURES: tuple[str, ...] = (
-    "none",
-    "wave",
-    "raise_left",
-    "raise_right",
-    "raise_both",
-    "reach",
-    "point",
-    "arms_crossed",
-    "hands_on_hips",
-    "wave_left",
-    "wave_both",
-)  # fmt: skip  ("wave" is the right hand's; names are only ever appended, so older datasets still load)
 
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
@@ -75,7 +61,7 @@ class MotionClip:
     split: str
     fps: float = FPS
     command: FloatArray | None = None  # [T, 3]: vx, vy (m/s, heading frame), yaw rate (rad/s)
-    gesture: NDArray[np.int16] | None = None  # [T]: index into GESTURES
+    gesture: NDArray[np.int16] | None = None  # [T]: index into GESTURE_LABELS
     captions: tuple[tuple[int, str], ...] = ()  # (first frame of the segment, caption), by frame
     source: str = "record"  # "record" or "csv:<file name>"
     seed: int | None = None  # the seed the split follows (episode seed, or name hash of an import)
@@ -94,9 +80,9 @@ class MotionClip:
         if self.command is not None and self.command.shape != (frames, 3):
             raise ConfigError(f"{where}: command must be [{frames}, 3], got shape {list(self.command.shape)}")
         if self.gesture is not None and (
-            self.gesture.shape != (frames,) or not 0 <= int(self.gesture.min()) <= int(self.gesture.max()) < len(GESTURES)
+            self.gesture.shape != (frames,) or not 0 <= int(self.gesture.min()) <= int(self.gesture.max()) < len(GESTURE_LABELS)
         ):
-            raise ConfigError(f"{where}: gesture must be [{frames}] indices below {len(GESTURES)}")
+            raise ConfigError(f"{where}: gesture must be [{frames}] indices below {len(GESTURE_LABELS)}")
         if any(not 0 <= frame < frames for frame, _ in self.captions):
             raise ConfigError(f"{where}: a caption starts outside the clip's {frames} frames")
 
@@ -167,7 +153,7 @@ def save_dataset(out_dir: str | Path, clips: Sequence[MotionClip], seed: int | N
         "seed": seed,
         "joint_names": list(JOINT_NAMES),
         "qpos_layout": QPOS_LAYOUT,
-        "gestures": list(GESTURES),
+        "gestures": list(GESTURE_LABELS),
         **(extra or {}),
         "clips": entries,
     }
@@ -200,8 +186,8 @@ def read_manifest(path: str | Path) -> tuple[Path, dict[str, Any]]:
     if manifest.get("fps") != FPS:
         raise ConfigError(f"{manifest_path}: fps is {manifest.get('fps')!r}, expected {FPS:g}")
     gestures = manifest.get("gestures")
-    if not isinstance(gestures, list) or list(GESTURES[: len(gestures)]) != gestures:
-        raise ConfigError(f"{manifest_path}: gestures {gestures!r} do not match this g1ctl's {list(GESTURES)}")
+    if not isinstance(gestures, list) or list(GESTURE_LABELS[: len(gestures)]) != gestures:
+        raise ConfigError(f"{manifest_path}: gestures {gestures!r} do not match this g1ctl's {list(GESTURE_LABELS)}")
     clips = manifest.get("clips")
     keys = {"file", "name", "split", "frames", "source"}
     if not isinstance(clips, list) or not all(isinstance(c, dict) and keys <= set(c) for c in clips):
@@ -261,10 +247,10 @@ def dataset_summary(path: str | Path) -> dict[str, Any]:
     """Clips and minutes per split, clips per source, and seconds per gesture label (recorded clips)."""
     folder, manifest = read_manifest(path)
     clips = load_dataset(folder)
-    gesture_frames = np.zeros(len(GESTURES), dtype=np.int64)
+    gesture_frames = np.zeros(len(GESTURE_LABELS), dtype=np.int64)
     for clip in clips:
         if clip.gesture is not None:
-            gesture_frames += np.bincount(clip.gesture, minlength=len(GESTURES))
+            gesture_frames += np.bincount(clip.gesture, minlength=len(GESTURE_LABELS))
     sources: dict[str, int] = {}
     for clip in clips:
         kind = clip.source.split(":")[0]
@@ -278,7 +264,7 @@ def dataset_summary(path: str | Path) -> dict[str, Any]:
         "minutes": minutes_per_split(clips),
         "frames": sum(c.frames for c in clips),
         "sources": sources,
-        "gesture_seconds": {name: round(float(n) / FPS, 1) for name, n in zip(GESTURES, gesture_frames, strict=True)},
+        "gesture_seconds": {name: round(float(n) / FPS, 1) for name, n in zip(GESTURE_LABELS, gesture_frames, strict=True)},
     }
 
 

@@ -23,7 +23,7 @@ from hw import g1, quat
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-_LEGS = g1.joint_slice(g1.LEG_JOINTS, qpos=True)  # left leg then right leg, six joints each
+_LEGS_IN_QPOS = g1.joint_slice(g1.LEG_JOINTS, qpos=True)  # left leg then right leg, six joints each
 _LEG_COLUMNS = np.array([g1.joint_indices(leg, qpos=True) for leg in (g1.LEFT_LEG_JOINTS, g1.RIGHT_LEG_JOINTS)])  # [2, 6]
 _POS, _ROT = g1.QPOS_ROOT_POS, g1.QPOS_ROOT_QUAT
 FADE_FRAMES = 3
@@ -77,7 +77,7 @@ def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_la
     both = np.array([0, 1])
     root_rot = quat.to_matrix(qpos[..., _ROT])  # [S, N, 3, 3]
     # Every frame's and the context's soles in one pass: rows (seed, frame, leg) then the context's two legs.
-    rows_q = np.concatenate((qpos[..., _LEGS].reshape(-1, 2, 6).reshape(-1, 6), context_last[_LEGS].reshape(2, 6)))
+    rows_q = np.concatenate((qpos[..., _LEGS_IN_QPOS].reshape(-1, 2, 6).reshape(-1, 6), context_last[_LEGS_IN_QPOS].reshape(2, 6)))
     rows_pos = np.concatenate((np.repeat(qpos[..., _POS].reshape(-1, 3), 2, axis=0), np.tile(context_last[_POS], (2, 1))))
     rows_rot = np.concatenate((np.repeat(root_rot.reshape(-1, 3, 3), 2, axis=0), np.tile(quat.to_matrix(context_last[_ROT]), (2, 1, 1))))
     rows_leg = np.concatenate((np.tile(both, seeds * frames), both))

@@ -25,7 +25,7 @@ from hw import g1
 from hw.errors import AssetError
 from hw.shipped import model_dir as model_dir_of
 
-_LEGS = (g1.joint_slice(g1.LEFT_LEG_JOINTS), g1.joint_slice(g1.RIGHT_LEG_JOINTS))  # in the joint vector
+_EACH_LEG_IN_JOINTS = (g1.joint_slice(g1.LEFT_LEG_JOINTS), g1.joint_slice(g1.RIGHT_LEG_JOINTS))  # in the joint vector
 
 
 class Planner:
@@ -101,7 +101,7 @@ class Planner:
         contacts = residual[:, :length, ft.NUM_CHANNELS :] > 0.0
         if self.legs is not None:
             joints_fixed = mask[:length, ft.JOINTS]
-            legs_fixed = np.stack([joints_fixed[:, leg].any(axis=-1) for leg in _LEGS], axis=-1)  # [N, 2]: left, right
+            legs_fixed = np.stack([joints_fixed[:, leg].any(axis=-1) for leg in _EACH_LEG_IN_JOINTS], axis=-1)  # [N, 2]: left, right
             qpos = lock_feet(qpos, contacts, self.legs, request.context[-1], legs_fixed)
         return qpos, contacts
 

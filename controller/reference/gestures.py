@@ -1,7 +1,7 @@
 """Upper-body gestures as arm keyframes of a plan request: the style library.
 
 A gesture (wave, raise_both, point, ...) is the motion dataset's procedural gesture
-(`motion_data.gestures`: a target pose per gesture, a sinusoid on the moving ones, blended
+(`commands.gestures`: a target pose per gesture, a sinusoid on the moving ones, blended
 in and out with a smoothstep), here turned into pose keyframes on the arm joints of each
 plan, so the planner layers it on whatever the legs do. Only the arms the gesture moves
 are constrained: the other arm keeps the planner's own swing, and the waist stays with the
@@ -24,8 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.motion_data.dataset import GESTURES
-from controller.motion_data.gestures import BLEND_S, MOTIONS, GesturePlayer, smoothstep
+from controller.commands.gestures import BLEND_S, GESTURE_LABELS, MOTIONS, GesturePlayer, smoothstep
 from controller.planner.request import FPS, BoolArray, Keyframe
 from hw import g1
 from hw.errors import ConfigError
@@ -73,7 +72,7 @@ class GestureStyle:
     """One entry of the library: the dataset gesture it plays, the arm joints it moves, its keyframe spacing."""
 
     name: str
-    index: int  # in motion_data.dataset.GESTURES, as GesturePlayer numbers them
+    index: int  # in commands.gestures.GESTURE_LABELS, as GesturePlayer numbers them
     arms: BoolArray  # [29]: the arm joints the gesture moves
     spacing_frames: int
 
@@ -93,7 +92,7 @@ class GestureLibrary:
         arm[g1.joint_indices(g1.ARM_JOINTS)] = True
         self._arms = arm
         self.styles: dict[str, GestureStyle] = {}
-        for index, name in enumerate(GESTURES):
+        for index, name in enumerate(GESTURE_LABELS):
             if index == 0:
                 continue
             moved = np.zeros(g1.NUM_JOINTS, dtype=bool)

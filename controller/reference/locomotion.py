@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from controller.inputs.base import ZERO, VelocityCommand
+from controller.commands.velocity import ZERO, VelocityCommand
 from controller.planner.request import FPS, PlanRequest, target_root
 from controller.reference.gestures import NONE_NAMES, Gesture, GestureConfig, GestureLibrary, merged
 from controller.reference.root_spring import RootState, RootTrajectory, SpringConfig, root_state_from_frames, root_trajectory

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.planner.request import CONTEXT_FRAMES, Plan, PlanRequest
 from controller.reference.buffer import ReferenceBuffer
 from controller.reference.locomotion import LocomotionConfig, SmartLocomotion

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.planner.request import FPS, Keyframe, target_root
 from hw import g1, quat
 from hw.errors import ConfigError, G1Error

@@ -8,7 +8,7 @@ from __future__ import annotations
 import abc
 from typing import Any
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.reference.window import ReferenceWindow
 from hw.types import RobotState
 

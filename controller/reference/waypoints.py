@@ -25,8 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from controller.inputs.base import ZERO, CommandLimits, VelocityCommand
-from controller.inputs.scripted import Waypoint
+from controller.commands.velocity import ZERO, CommandLimits, VelocityCommand
+from controller.commands.waypoints import WorldWaypoint
 from controller.reference.root_spring import RootState, SpringConfig, no_overshoot_gain, waypoint_command
 from controller.reference.source import ReferenceSource
 from controller.reference.window import ReferenceWindow
@@ -103,7 +103,9 @@ class WaypointError:
 class WaypointFollower:
     """Holds the targets and the progress; `command(state)` each tick gives the velocity to follow."""
 
-    def __init__(self, waypoints: Sequence[Waypoint], cfg: WaypointConfig = WaypointConfig(), limits: CommandLimits | None = None) -> None:
+    def __init__(
+        self, waypoints: Sequence[WorldWaypoint], cfg: WaypointConfig = WaypointConfig(), limits: CommandLimits | None = None
+    ) -> None:
         if not waypoints:
             raise ConfigError("a waypoint follower needs at least one waypoint")
         self.cfg = cfg

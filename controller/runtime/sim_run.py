@@ -42,7 +42,7 @@ from sim.robot import SimRobot
 from sim.world import SceneConfig, build_model
 
 if TYPE_CHECKING:
-    from controller.inputs.base import CommandLimits
+    from controller.commands.velocity import CommandLimits
     from controller.reference.planned import PlannedReference
     from controller.reference.source import ReferenceSource
 

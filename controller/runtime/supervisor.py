@@ -11,7 +11,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from controller.inputs.base import ZERO, CommandSample, VelocityCommand
+from controller.commands.velocity import ZERO, VelocityCommand
+from controller.inputs.base import CommandSample
 
 
 class Mode(enum.Enum):

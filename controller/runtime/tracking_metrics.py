@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.reference.buffer import ReferenceSample
 from hw import g1, quat
 from hw.types import FloatArray, RobotState

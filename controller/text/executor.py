@@ -37,8 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from controller.inputs.base import ZERO, CommandLimits, VelocityCommand
-from controller.inputs.scripted import Waypoint as WorldWaypoint
+from controller.commands.velocity import ZERO, CommandLimits, VelocityCommand
+from controller.commands.waypoints import WorldWaypoint
 from controller.reference.planned import PlannedReference
 from controller.reference.source import ReferenceSource
 from controller.reference.waypoints import WaypointConfig, WaypointFollower

@@ -61,7 +61,7 @@ _WAIST: tuple[tuple[tuple[float, float, float], FloatArray], ...] = (  # (offset
     ((-0.0039635, 0.0, 0.044), _X),  # waist_roll_link
     ((0.0, 0.0, 0.0), _Y),  # torso_link: waist pitch
 )
-_LEFT_ARM: tuple[tuple[tuple[float, float, float], tuple[float, float, float, float], FloatArray], ...] = (
+_LEFT_ARM_CHAIN: tuple[tuple[tuple[float, float, float], tuple[float, float, float, float], FloatArray], ...] = (
     ((0.0039563, 0.10022, 0.24778), (0.990264, 0.139201, 1.38722e-05, -9.86868e-05), _Y),  # shoulder pitch
     ((0.0, 0.038, -0.013831), (0.990268, -0.139172, 0.0, 0.0), _X),  # shoulder roll
     ((0.0, 0.00624, -0.1032), (1.0, 0.0, 0.0, 0.0), _Z),  # shoulder yaw
@@ -114,7 +114,7 @@ def arm_points(qpos: FloatArray) -> dict[str, ArmPoints]:
         position, rotation = torso_pos, torso_rot
         shoulder = elbow = np.zeros((frames, 3))
         upper_rot = np.zeros((frames, 3, 3))
-        for i, ((offset, rot, axis), column) in enumerate(zip(_LEFT_ARM, _ARM_COLUMNS[side], strict=True)):
+        for i, ((offset, rot, axis), column) in enumerate(zip(_LEFT_ARM_CHAIN, _ARM_COLUMNS[side], strict=True)):
             off, q = (np.asarray(offset), np.asarray(rot)) if side == "left" else _mirror(offset, rot)
             position = position + rotation @ off
             rotation = rotation @ quat.to_matrix(q) @ _rotations(axis, qpos[:, column])

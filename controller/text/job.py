@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.reference.planned import PlannedReference
 from controller.reports import write_report
 from controller.text.executor import TextReference, TextRunConfig, estimate_seconds

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from controller.inputs.base import ZERO, VelocityCommand
+from controller.commands.velocity import ZERO, VelocityCommand
 from controller.reference.buffer import ReferenceSample
 from controller.text.executor import TextReference
 from hw import g1, quat

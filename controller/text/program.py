@@ -34,7 +34,7 @@ class PromptRefused(G1Error, ValueError):
 
 
 @dataclass(frozen=True)
-class Waypoint:
+class RelativeWaypoint:
     """A root target in the frame of the robot at the clause's start: forward, left (m), heading change (deg, + left)."""
 
     forward_m: float
@@ -50,7 +50,7 @@ class Motion:
     several waypoints (the follower turns the short way to each).
     """
 
-    waypoints: tuple[Waypoint, ...]
+    waypoints: tuple[RelativeWaypoint, ...]
     speed_mps: float = 0.5
     yaw_rate: float = 0.8  # rad/s
 
@@ -61,7 +61,7 @@ class Motion:
             raise ValueError(f"motion speed {self.speed_mps} m/s or turning rate {self.yaw_rate} rad/s out of range")
 
     @property
-    def end(self) -> Waypoint:
+    def end(self) -> RelativeWaypoint:
         return self.waypoints[-1]
 
 

@@ -38,6 +38,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.commands.gestures import BLEND_S
 from controller.text.decompose import (
     MAX_PROMPT_CHARS,
     STEP_M,
@@ -47,7 +48,7 @@ from controller.text.decompose import (
     split_clauses,
     split_parts,
 )
-from controller.text.program import Clause, Motion, Program, PromptRefused, Waypoint
+from controller.text.program import Clause, Motion, Program, PromptRefused, RelativeWaypoint
 
 
 def _words(text: str) -> frozenset[str]:
@@ -68,7 +69,6 @@ CIRCLE_POINTS = 8
 SQUARE_SIDE_M = 1.0
 GESTURE_S = 3.0
 WAVE_HZ = 1.5
-BLEND_S = 0.5
 DEFAULT_WAIT_S = 2.0
 LOWER_ARMS_S = 1.0  # "lower your arms": a short stand, arms at rest
 MAX_CLAUSE_WALK_M = 10.0
@@ -88,8 +88,9 @@ CAPABILITIES = (
 )
 
 LOCOMOTION = ("walk", "turn", "wait", "return")
-GESTURES = ("wave", "raise", "point", "reach", "arms_crossed", "hands_on_hips")
-SUPPORTED = (*LOCOMOTION, *GESTURES)
+# Arm behaviours; a clause names the gesture with its side (`program.GESTURE_NAMES`: raise -> raise_left).
+GESTURE_BEHAVIOURS = ("wave", "raise", "point", "reach", "arms_crossed", "hands_on_hips")
+SUPPORTED = (*LOCOMOTION, *GESTURE_BEHAVIOURS)
 
 # Prototype phrases per behaviour: the encoder maps a part's action phrase to the nearest one.
 PROTOTYPES: dict[str, tuple[str, ...]] = {
@@ -371,11 +372,11 @@ def _refuse(part: str, reason: str) -> PromptRefused:
     return PromptRefused(f'cannot plan "{part}": {reason}; {CAPABILITIES}')
 
 
-def _turn_waypoints(total_deg: float, start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> list[Waypoint]:
+def _turn_waypoints(total_deg: float, start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> list[RelativeWaypoint]:
     """Turn in place by total_deg from `start` (f, l, heading): one waypoint, or equal pieces of at most 120 degrees."""
     f, lt, h = start
     n = 1 if abs(total_deg) <= SPLIT_TURN_ABOVE_DEG else math.ceil(abs(total_deg) / TURN_PIECE_DEG - 1e-9)
-    return [Waypoint(f, lt, h + total_deg * (k + 1) / n) for k in range(n)]
+    return [RelativeWaypoint(f, lt, h + total_deg * (k + 1) / n) for k in range(n)]
 
 
 def _rot(forward: float, left: float, heading_deg: float) -> tuple[float, float]:
@@ -397,19 +398,19 @@ def end_pose(clauses: Sequence[Clause]) -> tuple[float, float, float]:
     return pose
 
 
-def _repeat(waypoints: list[Waypoint], times: int) -> list[Waypoint]:
+def _repeat(waypoints: list[RelativeWaypoint], times: int) -> list[RelativeWaypoint]:
     """The waypoints done `times` times, each repetition from where the previous one ended."""
     out = list(waypoints)
     end = (waypoints[-1].forward_m, waypoints[-1].left_m, waypoints[-1].heading_deg)
     pose = end
     for _ in range(times - 1):
         for w in waypoints:
-            out.append(Waypoint(*compose(pose, (w.forward_m, w.left_m, w.heading_deg))))
+            out.append(RelativeWaypoint(*compose(pose, (w.forward_m, w.left_m, w.heading_deg))))
         pose = compose(pose, end)
     return out
 
 
-def _path_length(waypoints: Sequence[Waypoint]) -> float:
+def _path_length(waypoints: Sequence[RelativeWaypoint]) -> float:
     total, f, lt = 0.0, 0.0, 0.0
     for w in waypoints:
         total += math.hypot(w.forward_m - f, w.left_m - lt)
@@ -441,7 +442,7 @@ def _speed(part: str, q: Quantities) -> float:
     return q.speed_mps
 
 
-def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | str]]:
+def _walk(part: str, q: Quantities) -> tuple[list[RelativeWaypoint], dict[str, float | str]]:
     speed = _speed(part, q)
     info: dict[str, float | str] = {}
     there_and_back = bool(_THERE_AND_BACK_RE.search(part)) and "backward" in q.directions and len(q.directions) > 1
@@ -452,14 +453,14 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
         points = []
         for k in range(1, CIRCLE_POINTS + 1):
             a = 2 * math.pi * k / CIRCLE_POINTS
-            points.append(Waypoint(radius * math.sin(a), sign * radius * (1 - math.cos(a)), sign * math.degrees(a)))
+            points.append(RelativeWaypoint(radius * math.sin(a), sign * radius * (1 - math.cos(a)), sign * math.degrees(a)))
         info.update(shape="circle", radius_m=radius, direction="right" if sign < 0 else "left")
         return points, info
     if q.shape == "square":
         side = q.distance_m or SQUARE_SIDE_M
         sign = -1.0 if q.side == "right" else 1.0
         corners = [(side, 0.0), (side, sign * side), (0.0, sign * side), (0.0, 0.0)]
-        points = [Waypoint(f, lt, sign * 90.0 * (k + 1)) for k, (f, lt) in enumerate(corners)]
+        points = [RelativeWaypoint(f, lt, sign * 90.0 * (k + 1)) for k, (f, lt) in enumerate(corners)]
         info.update(shape="square", side_m=side, direction="right" if sign < 0 else "left")
         return points, info
     vector = {"forward": (1.0, 0.0), "backward": (-1.0, 0.0), "left": (0.0, 1.0), "right": (0.0, -1.0)}
@@ -469,7 +470,7 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
         legs, f, lt = [], 0.0, 0.0
         for d, m in q.distances:  # "2 m forward and 1 m back": one leg after the other
             f, lt = f + vector[d][0] * m, lt + vector[d][1] * m
-            legs.append(Waypoint(f, lt, 0.0))
+            legs.append(RelativeWaypoint(f, lt, 0.0))
         if q.negative or min(m for _, m in q.distances) <= 0:
             raise _refuse(part, "distances, angles and times must be positive")
         info.update(direction=" and ".join(d for d, _ in q.distances), distance_m=round(sum(m for _, m in q.distances), 3))
@@ -505,15 +506,15 @@ def _walk(part: str, q: Quantities) -> tuple[list[Waypoint], dict[str, float | s
         raise _refuse(part, "distances, angles and times must be positive")
     if q.bare_number is not None and (q.distance_m is not None or q.duration_s is not None):
         raise _refuse(part, f"the number {q.bare_number:g} has no unit (meters, steps, seconds)")
-    points = [Waypoint(unit[0] * distance, unit[1] * distance, 0.0)]
+    points = [RelativeWaypoint(unit[0] * distance, unit[1] * distance, 0.0)]
     if there_and_back:
-        points.append(Waypoint(0.0, 0.0, 0.0))
+        points.append(RelativeWaypoint(0.0, 0.0, 0.0))
         info["there_and_back"] = "yes"
     info["distance_m"] = round(distance, 3)
     return points, info
 
 
-def _turn(part: str, q: Quantities) -> tuple[list[Waypoint], float]:
+def _turn(part: str, q: Quantities) -> tuple[list[RelativeWaypoint], float]:
     if q.turn_deg is not None and q.bare_number is not None:
         raise _refuse(part, f"the number {q.bare_number:g} has no unit (degrees, turns)")
     if q.turn_deg is not None:
@@ -532,7 +533,7 @@ def _turn(part: str, q: Quantities) -> tuple[list[Waypoint], float]:
     return _turn_waypoints(sign * degrees), sign * degrees
 
 
-def _return(pose: tuple[float, float, float]) -> list[Waypoint]:
+def _return(pose: tuple[float, float, float]) -> list[RelativeWaypoint]:
     """Waypoints (in the frame of `pose`) back to the program's start position."""
     x, y, h = pose
     c, s = math.cos(math.radians(h)), math.sin(math.radians(h))
@@ -542,15 +543,15 @@ def _return(pose: tuple[float, float, float]) -> list[Waypoint]:
         return []
     bearing = math.degrees(math.atan2(lt, f))
     if abs(bearing) <= 20.0:
-        return [Waypoint(f, lt, 0.0)]
+        return [RelativeWaypoint(f, lt, 0.0)]
     if abs(bearing) > 135.0 and distance <= 1.5:
-        return [Waypoint(f, lt, 0.0)]  # short way back: walk backward
+        return [RelativeWaypoint(f, lt, 0.0)]  # short way back: walk backward
     if abs(abs(bearing) - 180.0) < 1e-6:
         bearing = 180.0  # straight behind: turn left
-    return [*_turn_waypoints(bearing), Waypoint(f, lt, bearing)]
+    return [*_turn_waypoints(bearing), RelativeWaypoint(f, lt, bearing)]
 
 
-_ARMS = {
+_GESTURE_ARMS = {
     "wave_left": {"left"}, "wave_right": {"right"}, "wave_both": {"left", "right"},
     "raise_left": {"left"}, "raise_right": {"right"}, "raise_both": {"left", "right"},
     "reach": {"right"}, "point": {"right"}, "arms_crossed": {"left", "right"}, "hands_on_hips": {"left", "right"},
@@ -598,7 +599,7 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
             shown = text if len(parts) == 1 else part
             raise _refuse(shown, REASONS.get(match.behaviour, REASONS["unknown"]))
     loco = [(p, m) for p, m in matches if m.behaviour in LOCOMOTION]
-    gestures = [(p, m) for p, m in matches if m.behaviour in GESTURES]
+    gestures = [(p, m) for p, m in matches if m.behaviour in GESTURE_BEHAVIOURS]
     if len(loco) > 1:
         raise _refuse(text, "it does one movement at a time (walk, turn or stand), with gestures on top")
     quantities: dict[str, float | str] = {}
@@ -646,7 +647,7 @@ def _resolve_clause(text: str, pose: tuple[float, float, float], previous: Claus
     for part, match in gestures:
         q = read_quantities(part)
         name = _gesture_name(match.behaviour, q)
-        if any(_ARMS[name] & _ARMS[other] for other in names):
+        if any(_GESTURE_ARMS[name] & _GESTURE_ARMS[other] for other in names):
             raise _refuse(text, "one gesture per arm at a time")
         names.append(name)
         _check_duration(part, q.duration_s, q.negative)

@@ -17,7 +17,7 @@ from typing import Literal
 
 import numpy as np
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.reference.window import ReferenceWindow
 from controller.tracking.tracker import Tracker
 from controller.tracking.velocity_policy import VelocityPolicy

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import abc
 
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.reference.window import ReferenceWindow
 from hw.types import JointCommand, RobotState
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.inputs.base import CommandLimits, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout
@@ -25,7 +25,7 @@ from hw.errors import ConfigError, PolicyError
 from hw.g1 import DAMPING_KD, DEFAULT_JOINT_POS
 from hw.types import FloatArray, JointCommand, RobotState, read_only
 
-GRAVITY = np.array([0.0, 0.0, -1.0])
+GRAVITY_DIRECTION = np.array([0.0, 0.0, -1.0])  # unit vector, world frame: the policy observes it in the base frame
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ class VelocityPolicy(Tracker):
         if "base_ang_vel" in slot:
             raw[slot["base_ang_vel"]] = state.base_ang_vel
         if "projected_gravity" in slot:
-            raw[slot["projected_gravity"]] = quat.rotate_inverse_one(state.base_quat, GRAVITY)
+            raw[slot["projected_gravity"]] = quat.rotate_inverse_one(state.base_quat, GRAVITY_DIRECTION)
         if "base_lin_vel" in slot:
             raw[slot["base_lin_vel"]] = quat.rotate_inverse_one(state.base_quat, state.base_lin_vel)
         if "command_lin_vel" in slot:

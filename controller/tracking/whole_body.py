@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from controller.assets import Assets
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.onnx_session import open_session
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationBuilder, ObservationLayout

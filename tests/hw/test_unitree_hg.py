@@ -8,7 +8,7 @@ import struct
 import numpy as np
 import pytest
 
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.inputs.unitree_remote import RemoteConfig, map_remote
 from hw import dds
 from hw.errors import ConfigError

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import pytest
 
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.inputs.gamepad import (
     ABS_RX,
     ABS_X,

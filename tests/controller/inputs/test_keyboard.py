@@ -11,8 +11,8 @@ from collections.abc import Iterator
 
 import pytest
 
+from controller.commands.velocity import CommandLimits
 from controller.inputs import keyboard
-from controller.inputs.base import CommandLimits
 from controller.inputs.keyboard import MAX_CONSECUTIVE_READ_ERRORS, KeyboardSource, KeyboardState, apply_key
 from hw.errors import InputDeviceError
 from tests.conftest import wait_for

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import pytest
 
-from controller.inputs.base import CommandLimits
+from controller.commands.velocity import CommandLimits
 from controller.inputs.scripted import ScriptedSource, available_scenarios, load_scenario, timeline
 from hw.errors import ConfigError
 

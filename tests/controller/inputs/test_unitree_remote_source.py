@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from controller.cli.robot import _remote
-from controller.inputs.base import Buttons, CommandLimits, CommandSample, CommandSource, VelocityCommand
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.inputs.base import Buttons, CommandSample, CommandSource
 from controller.inputs.registry import REMOTE_NEEDS_DDS, check_input, open_input
 from controller.inputs.unitree_remote import RemoteConfig, map_remote, remote_bytes
 from hw.dds.session import DdsConfig

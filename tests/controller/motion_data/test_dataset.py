@@ -10,10 +10,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from controller.commands.gestures import GESTURE_LABELS
 from controller.motion_data.csv_import import read_csv_clip, resample_qpos
 from controller.motion_data.dataset import (
     FPS,
-    GESTURES,
     MotionClip,
     dataset_summary,
     episode_seed,
@@ -28,7 +28,7 @@ from hw.g1 import JOINT_NAMES, STANDING_PELVIS_HEIGHT, default_joint_vector
 from tests.conftest import ROOT, g1ctl, one_line_error
 
 if TYPE_CHECKING:
-    from controller.motion_data.recorder import Recorder
+    from controller.eval.dataset_recorder import Recorder
 
 # The g1-moves clips sit beside the repository (../shared/data/g1-moves), or where G1_MOVES_DIR says.
 G1_MOVES = Path(os.environ.get("G1_MOVES_DIR", ROOT.parent / "shared" / "data" / "g1-moves"))
@@ -53,7 +53,7 @@ def make_clip(name: str, frames: int = 20, split: str = "train", labels: bool = 
         contacts=rng.random((frames, 2)) < 0.5,
         split=split,
         command=rng.normal(0.0, 0.3, (frames, 3)) if labels else None,
-        gesture=rng.integers(0, len(GESTURES), frames).astype(np.int16) if labels else None,
+        gesture=rng.integers(0, len(GESTURE_LABELS), frames).astype(np.int16) if labels else None,
         captions=((0, "walk forward slowly"), (frames // 2, "turn left in place with hands on hips")) if labels else (),
         source="record" if labels else "csv:x.csv",
         seed=7,
@@ -81,7 +81,8 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     manifest_path = save_dataset(tmp_path / "ds", clips, seed=1, extra={"policy": "fastsac"})
     manifest = json.loads(manifest_path.read_text())
     assert manifest["version"] == 1 and manifest["fps"] == 30 and manifest["seed"] == 1 and manifest["policy"] == "fastsac"
-    assert manifest["joint_names"] == list(JOINT_NAMES) and manifest["gestures"] == list(GESTURES) and "w,x,y,z" in manifest["qpos_layout"]
+    assert manifest["joint_names"] == list(JOINT_NAMES) and manifest["gestures"] == list(GESTURE_LABELS)
+    assert "w,x,y,z" in manifest["qpos_layout"]
     assert manifest["clips"][1] == {"file": "rec-1001.npz", "name": "rec-1001", "split": "val", "frames": 31, "source": "record", "seed": 7}
     with np.load(tmp_path / "ds" / "rec-1000.npz") as z:
         assert z["qpos"].dtype == np.float32 and z["contacts"].dtype == np.uint8 and z["gesture"].dtype == np.int16
@@ -248,38 +249,37 @@ def test_g1_moves_clips_import(tmp_path: Path) -> None:
 
 
 def test_command_programs_and_captions() -> None:
-    from controller.inputs.base import CommandLimits
-    from controller.motion_data.command_programs import SEGMENT_SECONDS, command_program
-    from controller.motion_data.gestures import with_gesture
+    from controller.commands.velocity import CommandLimits
+    from controller.motion_data.command_programs import SEGMENT_SECONDS, command_program, with_gesture
 
     segments = command_program(np.random.default_rng(4), 300.0, CommandLimits())
     assert segments[0].kind == "stand" and segments[0].start == 0.0
     assert sum(s.duration for s in segments) == pytest.approx(300.0)
     assert all(SEGMENT_SECONDS[0] - 1e-9 <= s.duration <= SEGMENT_SECONDS[1] + SEGMENT_SECONDS[0] for s in segments)
     assert {s.kind for s in segments} == {"stand", "forward", "backward", "strafe", "turn", "walk_turn", "diagonal", "speed_change"}
-    assert {s.gesture for s in segments} == set(range(len(GESTURES)))
+    assert {s.gesture for s in segments} == set(range(len(GESTURE_LABELS)))
     for s in segments:
         vx, vy, yaw = s.cmd
         assert -0.6 <= vx <= 0.8 and abs(vy) <= 0.4 and abs(yaw) <= 0.8
     assert command_program(np.random.default_rng(4), 300.0, CommandLimits()) == segments
-    assert with_gesture("walk forward slowly", GESTURES.index("wave")) == "walk forward slowly while waving the right hand"
-    assert with_gesture("stand still", GESTURES.index("hands_on_hips")) == "stand still with hands on hips"
+    assert with_gesture("walk forward slowly", GESTURE_LABELS.index("wave")) == "walk forward slowly while waving the right hand"
+    assert with_gesture("stand still", GESTURE_LABELS.index("hands_on_hips")) == "stand still with hands on hips"
     assert with_gesture("walk forward while turning left", 1) == "walk forward while turning left and waving the right hand"
 
 
 def test_gesture_blending_and_limits(g1_model: Any) -> None:
+    from controller.commands.gestures import BLEND_S, UPPER_JOINTS, GesturePlayer
     from controller.motion_data.command_programs import Segment, gesture_weight
-    from controller.motion_data.gestures import BLEND_S, UPPER_JOINTS, GesturePlayer
 
     ids = [g1_model.joint(j).id for j in JOINT_NAMES]
     lo, hi = g1_model.jnt_range[ids, 0], g1_model.jnt_range[ids, 1]
     player = GesturePlayer(JOINT_NAMES, lo, hi)
     base = np.asarray(default_joint_vector())
     upper = [JOINT_NAMES.index(j) for j in UPPER_JOINTS]
-    for g in range(1, len(GESTURES)):
+    for g in range(1, len(GESTURE_LABELS)):
         for tau in np.linspace(0.0, 2.0, 9):
             q = player.apply(base, g, 1.0, tau)
-            assert (q >= lo).all() and (q <= hi).all(), GESTURES[g]
+            assert (q >= lo).all() and (q <= hi).all(), GESTURE_LABELS[g]
             np.testing.assert_array_equal(q[:12], base[:12])  # the legs stay the policy's
         np.testing.assert_array_equal(player.apply(base, g, 0.0, 0.3), base)
         assert not np.allclose(player.apply(base, g, 1.0, 0.3)[upper], base[upper])
@@ -314,14 +314,14 @@ def test_foot_contacts_and_frame_sampling(g1_model: Any) -> None:
 
 @pytest.fixture(scope="module")
 def recorder() -> Recorder:
-    from controller.motion_data.recorder import Recorder
+    from controller.eval.dataset_recorder import Recorder
 
     return Recorder("fastsac", None)
 
 
 def test_record_a_short_dataset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, recorder: Recorder) -> None:
-    from controller.motion_data import recorder as dataset_record
-    from controller.motion_data.recorder import RecordConfig, record
+    from controller.eval import dataset_recorder as dataset_record
+    from controller.eval.dataset_recorder import RecordConfig, record
 
     monkeypatch.setattr(dataset_record, "Recorder", lambda policy, assets_dir: recorder)
     report = record(RecordConfig(out=tmp_path / "rec", minutes=0.2, seed=4, episode_seconds=(4.0, 6.0)))
@@ -384,7 +384,7 @@ def test_cli_record_import_info(tmp_path: Path) -> None:
     result = g1ctl("dataset", "info", str(tmp_path / "rec"))
     assert result.returncode == 0, result.stderr
     info = json.loads(result.stdout)
-    assert info["clips"] == {"train": 0, "val": 0, "test": 1} and set(info["gesture_seconds"]) == set(GESTURES)
+    assert info["clips"] == {"train": 0, "val": 0, "test": 1} and set(info["gesture_seconds"]) == set(GESTURE_LABELS)
 
 
 @pytest.mark.slow
@@ -401,7 +401,7 @@ def test_cli_mistakes_are_one_line(tmp_path: Path) -> None:
 @pytest.mark.slow  # a local Ray instance
 def test_recording_on_two_ray_workers_writes_the_same_clips(tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="the eval extra (ray) is not installed")
-    from controller.motion_data.recorder import RecordConfig, record
+    from controller.eval.dataset_recorder import RecordConfig, record
 
     common = {"minutes": 0.25, "seed": 6, "episode_seconds": (3.0, 5.0)}
     alone = record(RecordConfig(out=tmp_path / "one", **common))  # type: ignore[arg-type]

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from controller.commands.gestures import BLEND_S, GESTURE_LABELS, GesturePlayer, smoothstep
 from controller.inputs.scripted import load_scenario
-from controller.motion_data.dataset import GESTURES
-from controller.motion_data.gestures import BLEND_S, GesturePlayer, smoothstep
 from controller.planner.request import FPS, Keyframe, PlanRequest
 from controller.planner.runtime import Planner
 from controller.reference.gestures import Gesture, GestureConfig, GestureLibrary, merged
@@ -28,12 +27,12 @@ def player_angles(name: str, start: float, t: float) -> np.ndarray:
     """What the dataset's gesture player gives at run time t for a gesture that started at `start` (blend in only)."""
     unbounded = np.full(g1.NUM_JOINTS, np.inf)
     player = GesturePlayer(g1.JOINT_NAMES, -unbounded, unbounded)
-    return player.apply(BASE, GESTURES.index(name), smoothstep((t - start) / BLEND_S), t - start)
+    return player.apply(BASE, GESTURE_LABELS.index(name), smoothstep((t - start) / BLEND_S), t - start)
 
 
 def test_every_gesture_holds_only_arm_joints_and_wave_is_the_right_arm() -> None:
     library = GestureLibrary()
-    assert set(library.names) == set(GESTURES) - {"none"}
+    assert set(library.names) == set(GESTURE_LABELS) - {"none"}
     for style in library.styles.values():
         assert style.arms.any() and not (style.arms & ~ARMS).any(), style.name  # no leg or waist joint, ever
     wave = library.style("wave")

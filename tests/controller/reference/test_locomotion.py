@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.planner.runtime import Planner
 from controller.reference.locomotion import LocomotionConfig, SmartLocomotion, tilt_limited
 from controller.reference.scheduler import implausible_root

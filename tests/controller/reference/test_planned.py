@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.reference.locomotion import SmartLocomotion
 from controller.reference.planned import shift_frames
 from hw import g1, quat

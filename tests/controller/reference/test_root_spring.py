@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.planner.request import FPS
 from controller.reference.root_spring import (
     RootState,

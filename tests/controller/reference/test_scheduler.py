@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.planner.request import Plan, PlanRequest
 from controller.planner.runtime import Planner
 from controller.reference.buffer import ReferenceBuffer

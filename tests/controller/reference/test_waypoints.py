@@ -8,8 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.inputs.base import CommandLimits, VelocityCommand
-from controller.inputs.scripted import Waypoint, load_scenario
+from controller.commands.velocity import CommandLimits, VelocityCommand
+from controller.commands.waypoints import WorldWaypoint
+from controller.inputs.scripted import load_scenario
 from controller.planner.request import Plan, PlanRequest
 from controller.reference.planned import PlannedReference, PlannedReferenceConfig
 from controller.reference.root_spring import SpringConfig, no_overshoot_gain
@@ -38,7 +39,7 @@ def state(t: float, x: float, y: float, heading_deg: float = 0.0, v: tuple[float
 
 
 def follower(*targets: tuple[float, float, float], **kwargs: float) -> WaypointFollower:
-    return WaypointFollower([Waypoint(x, y, h) for x, y, h in targets], replace(CFG, **kwargs))
+    return WaypointFollower([WorldWaypoint(x, y, h) for x, y, h in targets], replace(CFG, **kwargs))
 
 
 def hold_still(f: WaypointFollower, t0: float, x: float, y: float, heading_deg: float, seconds: float) -> VelocityCommand:
@@ -63,7 +64,7 @@ def test_walks_at_the_target_and_slows_near_it() -> None:
 
 
 def test_the_command_is_clamped_to_the_policy_ranges() -> None:
-    f = WaypointFollower([Waypoint(3.0, 0.0)], CFG, CommandLimits(vx=(-0.3, 0.3)))
+    f = WaypointFollower([WorldWaypoint(3.0, 0.0)], CFG, CommandLimits(vx=(-0.3, 0.3)))
     assert f.command(state(0.0, 0.0, 0.0)).vx == 0.3
 
 

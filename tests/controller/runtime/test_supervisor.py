@@ -1,6 +1,7 @@
 from __future__ import annotations
 
-from controller.inputs.base import Buttons, CommandSample, VelocityCommand
+from controller.commands.velocity import VelocityCommand
+from controller.inputs.base import Buttons, CommandSample
 from controller.runtime.supervisor import Mode, Supervisor
 
 WALK = VelocityCommand(vx=0.5)

@@ -12,15 +12,15 @@ from controller.reference.planned import PlannedReference
 from controller.text.executor import SETTLE_PER_WAYPOINT_S, TextReference, TextRunConfig, estimate_seconds, from_frame, to_frame
 from controller.text.kinematic import run_kinematic
 from controller.text.metrics import transition_score
-from controller.text.program import Clause, Motion, Program, Waypoint
+from controller.text.program import Clause, Motion, Program, RelativeWaypoint
 from controller.text.report import reference_with_boundaries
 from controller.tracking.presets import policy_rate_hz
 
 PROGRAM = Program(
     "walk forward a meter, then turn left 90 degrees, then wave",
     (
-        Clause("walk forward a meter", Motion((Waypoint(1.0, 0.0, 0.0),))),
-        Clause("turn left 90 degrees", Motion((Waypoint(0.0, 0.0, 90.0),))),
+        Clause("walk forward a meter", Motion((RelativeWaypoint(1.0, 0.0, 0.0),))),
+        Clause("turn left 90 degrees", Motion((RelativeWaypoint(0.0, 0.0, 90.0),))),
         Clause("wave", None, ("wave_right",), 2.0),
     ),
 )

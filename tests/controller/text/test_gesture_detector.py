@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from controller.motion_data.dataset import GESTURES, load_dataset
-from controller.motion_data.gestures import BLEND_S, GesturePlayer, smoothstep
+from controller.commands.gestures import BLEND_S, GESTURE_LABELS, GesturePlayer, smoothstep
+from controller.motion_data.dataset import load_dataset
 from controller.text.gesture_detector import DetectorConfig, arm_features, arm_points, detect_gestures
 from controller.text.program import DETECTED_GESTURES
 from hw import g1
@@ -28,7 +28,7 @@ def played(gesture: str, seconds: float = 4.0, blend_s: float = BLEND_S) -> np.n
     """The G1 standing in its default pose while the procedural gesture player blends `gesture` in and out."""
     unbounded = np.full(g1.NUM_JOINTS, 10.0)
     player = GesturePlayer(g1.JOINT_NAMES, -unbounded, unbounded)
-    index = GESTURES.index(gesture) if gesture != "none" else 0
+    index = GESTURE_LABELS.index(gesture) if gesture != "none" else 0
     base = np.asarray(g1.standing_qpos())
     q0 = np.asarray(g1.default_joint_vector())
     frames = []

@@ -14,7 +14,7 @@ from controller.text.metrics import (
     order_assignment,
     transition_score,
 )
-from controller.text.program import Clause, Motion, Waypoint
+from controller.text.program import Clause, Motion, RelativeWaypoint
 from hw import g1
 
 
@@ -30,7 +30,7 @@ def test_motion_caption_describes_what_was_measured() -> None:
 
 
 def test_clause_caption_uses_the_resolved_goal() -> None:
-    clause = Clause("could you back up a meter", Motion((Waypoint(-1.0, 0.0, 0.0),)), gestures=("raise_left", "point"))
+    clause = Clause("could you back up a meter", Motion((RelativeWaypoint(-1.0, 0.0, 0.0),)), gestures=("raise_left", "point"))
     assert clause_caption(clause) == "walk backward 1.0 meters and raise the left arm"  # point is not detectable
 
 

@@ -12,7 +12,7 @@ import onnx
 import pytest
 from onnx import TensorProto, helper, numpy_helper
 
-from controller.inputs.base import VelocityCommand
+from controller.commands.velocity import VelocityCommand
 from controller.reference.buffer import ReferenceSample
 from controller.reference.window import ReferenceWindow
 from controller.tracking.observation import ObservationLayout, ObsTerm

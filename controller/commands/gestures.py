@@ -1,8 +1,10 @@
-"""Procedural waist and arm gestures for the recorded motion dataset: poses, motions, captions.
+"""Procedural waist and arm gestures: their names, poses and motions, and the player that blends them in.
 
 Each gesture is a target for the upper-body joints (waist and both arms), static or
 oscillating, clamped inside the joint limits; `GesturePlayer` blends it over the policy's
-own targets with a weight that rises and falls with a smoothstep.
+own targets with a weight that rises and falls with a smoothstep. The recorded motion
+dataset labels its frames with these gestures, and the planner's gesture library
+(`reference.gestures`) turns them into keyframes.
 """
 
 from __future__ import annotations
@@ -12,40 +14,32 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from controller.motion_data.dataset import GESTURES
 from hw.errors import ConfigError
 from hw.g1 import UPPER_BODY_JOINTS
 from hw.types import FloatArray
 
 # --- gestures ------------------------------------------------------------------------------------
 
+# Index 0 is "no gesture": the policy's own arm and waist targets. A gesture's label in the
+# dataset and in `GesturePlayer` is its index here.
+GESTURE_LABELS: tuple[str, ...] = (
+    "none",
+    "wave",
+    "raise_left",
+    "raise_right",
+    "raise_both",
+    "reach",
+    "point",
+    "arms_crossed",
+    "hands_on_hips",
+    "wave_left",
+    "wave_both",
+)  # fmt: skip  ("wave" is the right hand's; names are only ever appended, so older datasets still load)
+
 UPPER_JOINTS: tuple[str, ...] = UPPER_BODY_JOINTS  # waist (3), left arm (7), right arm (7)
 BLEND_S = 0.5
 _ARM = ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_roll", "wrist_pitch", "wrist_yaw")
 _MIRRORED = {"shoulder_roll", "shoulder_yaw", "wrist_roll", "wrist_yaw", "waist_yaw", "waist_roll"}
-
-GESTURE_PHRASES: dict[str, str] = {
-    "wave": "waving the right hand",
-    "raise_left": "with the left arm raised",
-    "raise_right": "with the right arm raised",
-    "raise_both": "with both arms raised",
-    "reach": "reaching forward with the right hand",
-    "point": "pointing to the front right",
-    "arms_crossed": "with arms crossed",
-    "hands_on_hips": "with hands on hips",
-    "wave_left": "waving the left hand",
-    "wave_both": "waving both hands",
-}
-
-
-def with_gesture(caption: str, gesture: int) -> str:
-    """'walk forward slowly' + wave -> 'walk forward slowly while waving the right hand'."""
-    if gesture == 0:
-        return caption
-    phrase = GESTURE_PHRASES[GESTURES[gesture]]
-    if phrase.startswith("with "):
-        return f"{caption} {phrase}"
-    return f"{caption} and {phrase}" if " while " in caption else f"{caption} while {phrase}"
 
 
 def _arm(side: str, **angles: float) -> dict[str, float]:
@@ -124,7 +118,7 @@ class GesturePlayer:
         self._masks: list[NDArray[np.bool_]] = [np.zeros(len(UPPER_JOINTS), dtype=bool)]
         self._motions: list[list[tuple[int, float, float]]] = [[]]
         self._phases: list[tuple[FloatArray, FloatArray]] = [(np.zeros(len(UPPER_JOINTS)), np.ones(len(UPPER_JOINTS)))]
-        for name in GESTURES[1:]:
+        for name in GESTURE_LABELS[1:]:
             pose = POSES[name]
             target = np.zeros(len(UPPER_JOINTS))
             mask = np.zeros(len(UPPER_JOINTS), dtype=bool)

@@ -9,7 +9,8 @@ blended in and out over 0.5 s with a smoothstep. The state is sampled at 30 fps 
 and one caption per segment. Episodes last 60-120 s, each with its own seed; after a fall,
 the last 2 s before it are dropped and a new episode starts.
 
-Imports MuJoCo (through `sim`).
+An application above the dataset it writes (`motion_data`): like the evaluation suites it
+drives whole runs as seeded tasks on `executor`, so it sits beside them. Imports MuJoCo (through `sim`).
 """
 
 from __future__ import annotations
@@ -28,11 +29,11 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
+from controller.commands.gestures import GesturePlayer
+from controller.commands.velocity import VelocityCommand
 from controller.eval.executor import Executor, TaskLost
-from controller.inputs.base import VelocityCommand
 from controller.motion_data.command_programs import command_program, gesture_starts, gesture_weight
 from controller.motion_data.dataset import FPS, MotionClip, episode_seed, minutes_per_split, save_dataset, split_for_seed
-from controller.motion_data.gestures import GesturePlayer
 from controller.reference.window import ReferenceWindow
 from controller.tracking.presets import load_policy
 from controller.tracking.velocity_policy import VelocityPolicy
@@ -65,7 +66,9 @@ class RecordConfig:
 
 
 @dataclass
-class Episode:
+class RecordedEpisode:
+    """What one recording episode gave: its clip, whether the robot fell, the simulated time spent."""
+
     clip: MotionClip | None  # None: nothing kept (a fall too early)
     fell: bool
     sim_seconds: float  # simulated, including the warm-up and anything dropped
@@ -87,7 +90,7 @@ class Recorder:
         self.limits = self.policy.command_limits
         self.dt = 1.0 / self.policy.cfg.rate_hz
 
-    def episode(self, seed: int, seconds: float) -> Episode:
+    def episode(self, seed: int, seconds: float) -> RecordedEpisode:
         """One episode of `seconds` recorded seconds with its own seed; stops early at a fall."""
         rng = np.random.default_rng(seed)
         robot, policy, sampler = self.robot, self.policy, self.sampler
@@ -121,7 +124,7 @@ class Recorder:
         keep = min(keep, frames, sampler.frames)
         sim_seconds = robot.time - sim_start
         if keep < MIN_CLIP_S * FPS:
-            return Episode(None, fell, sim_seconds)
+            return RecordedEpisode(None, fell, sim_seconds)
         qpos, contacts = sampler.take(keep)
         captions = tuple((round(s.start * FPS), s.caption) for s in segments if round(s.start * FPS) < keep)
         clip = MotionClip(
@@ -135,7 +138,7 @@ class Recorder:
             source="record",
             seed=seed,
         )
-        return Episode(clip, fell, sim_seconds)
+        return RecordedEpisode(clip, fell, sim_seconds)
 
     def _hide_gesture(self, state: RobotState, gesture: int, weight: float) -> RobotState:
         """The state as the policy sees it: joints under a gesture read as if they tracked the policy's own targets.
@@ -205,7 +208,7 @@ def record(cfg: RecordConfig) -> dict[str, Any]:
             if index >= 1000:
                 raise ConfigError("more than 1000 episodes in one run; record in several runs with different seeds")
             wave = _plan(cfg, index, kept, target, count=1 if executor.in_process else 2 * cfg.workers)
-            results: dict[int, Episode] = {}
+            results: dict[int, RecordedEpisode] = {}
             for i, episode in executor.map_unordered(_record_episode, [(cfg.policy, cfg.assets_dir, seed, n) for seed, n in wave]):
                 if isinstance(episode, TaskLost):
                     raise ConfigError(f"recording episode {index + i} was lost twice ({episode}); run again")
@@ -267,5 +270,5 @@ def _recorder(policy: str, assets_dir: str | None) -> Recorder:
     return Recorder(policy, assets_dir)
 
 
-def _record_episode(policy: str, assets_dir: str | None, seed: int, length: float) -> Episode:
+def _record_episode(policy: str, assets_dir: str | None, seed: int, length: float) -> RecordedEpisode:
     return _recorder(policy, assets_dir).episode(seed, length)
