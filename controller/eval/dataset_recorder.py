@@ -146,7 +146,7 @@ class Recorder:
         The locomotion policy never saw raised or crossed arms in training; observing them
         throws its leg actions off (a raised arm felled the robot within 2 s). Hidden, it
         balances the gesture's mass and reaction forces through the base orientation and
-        gyro alone, like the decoupled tracker of DESIGN.md.
+        gyro alone, like the decoupled tracker.
         """
         w = self.gestures.joint_weights(gesture, weight)
         idx = self.gestures.index

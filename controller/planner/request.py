@@ -1,4 +1,4 @@
-"""Plan requests and plans: the planner contract of DESIGN.md as typed values.
+"""Plan requests and plans: the planner contract (docs/planner.md) as typed values.
 
 A request is checked once, here, so every planner (the learned one, the baselines, a
 planner exported elsewhere) sees the same valid input. Frames are G1 `qpos` at 30 fps:

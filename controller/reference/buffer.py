@@ -2,9 +2,9 @@
 
 The planner makes plans at 30 fps and the tracker reads at 50 Hz, so the tracker reads
 by time: linear interpolation for root position and joints, slerp for the root
-quaternion, velocities by finite difference over one frame period (DESIGN.md, "Data
+quaternion, velocities by finite difference over one frame period (docs/design.md, "Data
 conventions"). A new plan is spliced a short look-ahead after now and cross-faded over
-its first frames, so the part being executed never jumps (DESIGN.md, "Replanning").
+its first frames, so the part being executed never jumps (docs/planner.md, "Planner in the loop").
 
 Each plan is kept as a segment on its own 30 fps grid, from its start time until the
 next plan's start: the planner's frames are never resampled, and reading costs a
