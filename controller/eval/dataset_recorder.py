@@ -15,6 +15,7 @@ drives whole runs as seeded tasks on `executor`, so it sits beside them. Imports
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import functools
 import math
@@ -89,6 +90,10 @@ class Recorder:
         self.sampler = FrameSampler(self.robot, FPS)
         self.limits = self.policy.command_limits
         self.dt = 1.0 / self.policy.cfg.rate_hz
+
+    def close(self) -> None:
+        """Closes the simulated G1; safe twice."""
+        self.robot.close()
 
     def episode(self, seed: int, seconds: float) -> RecordedEpisode:
         """One episode of `seconds` recorded seconds with its own seed; stops early at a fall."""
@@ -266,8 +271,11 @@ def _plan(cfg: RecordConfig, index: int, kept: float, target: float, count: int)
 
 @functools.cache
 def _recorder(policy: str, assets_dir: str | None) -> Recorder:
-    """One recorder per process (and per Ray worker): the policy and the model load once."""
-    return Recorder(policy, assets_dir)
+    """One recorder per process (and per Ray worker): the policy and the model load once, the robot
+    closes when the process exits."""
+    recorder = Recorder(policy, assets_dir)
+    atexit.register(recorder.close)
+    return recorder
 
 
 def _record_episode(policy: str, assets_dir: str | None, seed: int, length: float) -> RecordedEpisode:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -310,13 +311,16 @@ def test_foot_contacts_and_frame_sampling(g1_model: Any) -> None:
 
     mujoco.mj_forward(robot.model, robot.data)
     assert not FootContacts(robot.model).read(robot.data).any()
+    robot.close()
 
 
 @pytest.fixture(scope="module")
-def recorder() -> Recorder:
+def recorder() -> Iterator[Recorder]:
     from controller.eval.dataset_recorder import Recorder
 
-    return Recorder("fastsac", None)
+    recorder = Recorder("fastsac", None)
+    yield recorder
+    recorder.close()
 
 
 def test_record_a_short_dataset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, recorder: Recorder) -> None:
