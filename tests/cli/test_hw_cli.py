@@ -152,9 +152,8 @@ def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
 
 def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     report_path = tmp_path / "lossy.json"
-    result = g1ctl(
-        "sim", "--hardware", "sim-can", "--faults", "configs/faults/lossy-can.yaml", "--duration", "1.5", "--report", str(report_path)
-    )
+    lossy = str(config_dir("faults") / "lossy-can.yaml")
+    result = g1ctl("sim", "--hardware", "sim-can", "--faults", lossy, "--duration", "1.5", "--report", str(report_path))
     assert result.returncode == 0, result.stderr
     hw = json.loads(report_path.read_text())["hw"]
     assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
@@ -184,7 +183,7 @@ def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     assert silent.returncode == 0 and "drill can0-silent-at-bring-up: passed" in silent.stdout  # configure names the silent motors
     assert "motors did not answer: left_hip_pitch_joint (bus can0, id 1)" in silent.stderr
 
-    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
+    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", lossy))
     bad = tmp_path / "bad.yaml"
     bad.write_text("buses:\n  can9: {drop_reply_prob: 0.1}\n")
     assert "buses ['can9'] are not in the hardware config" in one_line_error(g1ctl("sim", "--hardware", "sim-can", "--faults", str(bad)))
