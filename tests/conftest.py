@@ -166,8 +166,12 @@ def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: 
     return qpos
 
 
-def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
-    """Poll `condition` every 5 ms until it holds (True) or `timeout` s pass (False): for threads under test."""
+HANG_S = 10.0  # how long a test waits for what must happen: only a hang runs into it, a loaded machine is slow, not wrong
+
+
+def wait_for(condition: Callable[[], bool], timeout: float = HANG_S) -> bool:
+    """Poll `condition` every 5 ms until it holds (True) or `timeout` s pass (False): for threads, processes and
+    kernel buffers under test."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
