@@ -191,20 +191,38 @@ def fake_embed(strings: list[str]) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-@pytest.fixture
-def sim_dds_config(tmp_path: Path) -> Callable[[int], Path]:
-    """A copy of the shipped sim-dds hardware config on its own DDS domain (`offset` picks among this run's domains).
+@pytest.fixture(scope="session")
+def claim_dds_domain() -> Iterator[Callable[[], int]]:
+    """A function that claims a DDS domain for this test session alone, as the product claims one for a simulated run
+    (`hw.dds.domains`): two test runs on one machine never hear each other, nor a simulated run beside them.
 
-    Two test runs on one machine (or two tests beside each other) must not hear each other's robots.
+    Every claim is held until the session ends, so no two tests share a domain either: Cyclone keeps a domain's
+    configuration for the life of the process, and a robot process of an earlier test may still be winding down.
     """
+    from hw.dds.domains import SPARE_DOMAINS, claim_domain
+
+    claims = []
+
+    def claim() -> int:
+        claims.append(claim_domain(SPARE_DOMAINS.start))
+        return claims[-1].domain
+
+    yield claim
+    for held in claims:
+        held.release()
+
+
+@pytest.fixture
+def sim_dds_config(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> Callable[[], Path]:
+    """A function that writes a copy of the shipped sim-dds hardware config on a DDS domain of its own (`claim_dds_domain`)."""
     from hw.shipped import config_dir
 
-    def on_domain(offset: int) -> Path:
+    def on_a_domain_of_its_own() -> Path:
         text = (config_dir("hardware") / "sim-dds.yaml").read_text()
-        domain = 20 + (os.getpid() * 7 + offset) % 200
+        domain = claim_dds_domain()
         path = tmp_path / f"sim-dds-{domain}.yaml"
         path.write_text(text.replace("dds: {domain: 1,", f"dds: {{domain: {domain},"))
         assert f"domain: {domain}," in path.read_text()
         return path
 
-    return on_domain
+    return on_a_domain_of_its_own

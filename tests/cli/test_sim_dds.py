@@ -16,9 +16,9 @@ from tests.conftest import g1ctl
 pytestmark = pytest.mark.slow  # the CLI and the robot process, on the wall clock
 
 
-def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_config: Callable[[int], Path]) -> None:
+def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_config: Callable[[], Path]) -> None:
     report_path = tmp_path / "report.json"
-    hardware = sim_dds_config(0)
+    hardware = sim_dds_config()
     result = g1ctl("sim", "--scenario", "walk_turn_stop", "--duration", "6", "--hardware", str(hardware), "--report", str(report_path))
     assert result.returncode == 0, result.stderr
     report = json.loads(report_path.read_text())
@@ -35,9 +35,9 @@ def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_co
     assert hw["wire"]["outside_limits"] == 0 and hw["wire"]["commands"] == 29 * robot["commands"]  # the robot audited each one
 
 
-def test_a_drill_on_the_robot_in_its_own_process_is_judged_on_what_it_took(tmp_path: Path, sim_dds_config: Callable[[int], Path]) -> None:
+def test_a_drill_on_the_robot_in_its_own_process_is_judged_on_what_it_took(tmp_path: Path, sim_dds_config: Callable[[], Path]) -> None:
     report_path = tmp_path / "report.json"
-    hardware = str(sim_dds_config(1))
+    hardware = str(sim_dds_config())
     result = g1ctl("sim", "--duration", "3.5", "--hardware", hardware, "--faults", "dds-stale", "--report", str(report_path))
     assert result.returncode == 0, result.stdout + result.stderr
     assert "drill dds-stale: passed (every motor safe" in result.stdout

@@ -27,11 +27,11 @@ def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     assert report["counters"]["crc_errors"] == 0
 
 
-def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callable[[int], Path]) -> None:
+def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from controller.bench.dds import run_dds_bench
 
-    report = run_dds_bench(seconds=1.0, rt_priority=0, cpu=-1, hardware=str(sim_dds_config(5)))
+    report = run_dds_bench(seconds=1.0, rt_priority=0, cpu=-1, hardware=str(sim_dds_config()))
     assert report["cycles"] > 300
     assert set(report["cycle_ms"]) == set(report["raw_round_trip_ms"]) == set(report["raw_wire_round_trip_ms"]) == {"p50", "p99"}
     assert report["ratio"] == pytest.approx(report["cycle_ms"]["p50"] / report["raw_round_trip_ms"]["p50"], abs=2e-3)
