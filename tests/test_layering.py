@@ -197,6 +197,7 @@ def global_state_changed_by(modules: list[str]) -> dict[str, object]:
     return dict(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
+@pytest.mark.slow
 def test_importing_any_module_changes_no_global_state() -> None:
     """No environment variable set and no matplotlib backend chosen on import: that is for the
     function that renders or draws. The trainer's torch modules are checked by the next test."""

@@ -26,7 +26,7 @@ from hw.jointmap import load_robot_config
 from hw.robot import Lifecycle
 from tests.conftest import HANG_S
 
-pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock per drill
+pytestmark = pytest.mark.slow
 
 FAULT_AT_S = 0.4  # after the robot's first command: the host is active by then
 

@@ -20,7 +20,7 @@ from hw.dds.session import DdsConfig, DdsSession
 from hw.protocols import unitree_hg as hg
 from tests.conftest import HANG_S, wait_for
 
-pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock
+pytestmark = pytest.mark.slow
 
 
 def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command(claim_dds_domain: Callable[[], int]) -> None:

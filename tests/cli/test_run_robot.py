@@ -20,8 +20,6 @@ pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not insta
 from hw.shipped import config_dir
 from tests.conftest import g1ctl, one_line_error
 
-pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock, and the CLI
-
 
 def a_robot_config(tmp_path: Path, domain: int) -> Path:
     text = (config_dir("hardware") / "g1-dds.yaml").read_text()
@@ -33,6 +31,7 @@ def a_robot_config(tmp_path: Path, domain: int) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_run_drives_a_robot_that_answers_on_the_configs_domain(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> None:
     domain = claim_dds_domain()
     robot = subprocess.Popen(

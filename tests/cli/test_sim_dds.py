@@ -13,7 +13,7 @@ pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not insta
 
 from tests.conftest import g1ctl
 
-pytestmark = pytest.mark.slow  # the CLI and the robot process, on the wall clock
+pytestmark = pytest.mark.slow
 
 
 def test_walking_against_the_robot_in_its_own_process(tmp_path: Path, sim_dds_config: Callable[[], Path]) -> None:

@@ -10,8 +10,6 @@ import pytest
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
 
-pytestmark = pytest.mark.slow  # benchmarks
-
 
 def test_loop_bench_reports_both_loops() -> None:
     report = run_loop_bench("fastsac", rounds=1, duration=2.0, assets_dir=None)
@@ -19,6 +17,7 @@ def test_loop_bench_reports_both_loops() -> None:
     assert report["ratio"] == pytest.approx(report["stack_rtf"] / report["minimal_rtf"], abs=2e-3)  # both sides rounded to 3 places
 
 
+@pytest.mark.slow
 def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     report = run_hw_bench(seconds=0.6, rt_priority=0, cpu=-1)  # pins nothing: the pytest process keeps its CPUs
     assert report["cycles"] > 100
@@ -27,6 +26,7 @@ def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     assert report["counters"]["crc_errors"] == 0
 
 
+@pytest.mark.slow
 def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from controller.bench.dds import run_dds_bench
