@@ -23,7 +23,7 @@ demo: install
 	$(BIN)/g1ctl sim --scenario walk_turn_stop --video runs/demo.mp4 --report runs/demo.json --progress
 
 # `make test` runs every test on the base install; the ones that need torch skip, naming the train extra.
-# `make test-quick` leaves out the tests marked `slow` (over 2 s each, measured); `make test-train`
+# `make test-quick` leaves out the tests marked `slow` (measured; the threshold is in pyproject.toml); `make test-train`
 # installs the train extra and runs the tests that need it. PYTEST_ARGS passes more options (CI: --durations=15).
 PYTEST_ARGS ?=
 test: install

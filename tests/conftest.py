@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
 import zlib
 from collections.abc import Callable, Iterator
@@ -24,6 +25,8 @@ from hw.g1 import JOINT_NAMES
 if TYPE_CHECKING:
     import mujoco
 
+ROOT = Path(__file__).resolve().parent.parent  # the repository
+
 
 @pytest.fixture(scope="session", autouse=True)
 def _process_scheduling_is_left_alone() -> Iterator[None]:
@@ -33,6 +36,44 @@ def _process_scheduling_is_left_alone() -> Iterator[None]:
     yield
     after = (os.sched_getaffinity(0), os.sched_getscheduler(0))
     assert after == before, f"a test changed the pytest process's (CPU affinity, scheduler) from {before} to {after}"
+
+
+def _repository_status() -> list[str] | None:
+    """`git status` of the repository, ignored files included (caches and the venv left out); None outside a git checkout."""
+    try:
+        top = subprocess.run(["git", "rev-parse", "--show-toplevel"], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    except FileNotFoundError:  # no git on this machine
+        return None
+    if top.returncode != 0 or Path(top.stdout.strip()).resolve() != ROOT:
+        return None  # an installed copy of the tests, or a tree inside another repository
+    caches = (".venv", ".pytest_cache", ".mypy_cache", ".ruff_cache", "*.egg-info")
+    excluded = [f":(exclude,glob){c}/**" for c in caches] + [":(exclude,glob)**/__pycache__/**"]
+    status = subprocess.run(
+        ["git", "status", "--porcelain", "--untracked-files=all", "--ignored=traditional", "--", ".", *excluded],
+        capture_output=True, text=True, cwd=ROOT, check=True, timeout=60,
+    )  # fmt: skip
+    return status.stdout.splitlines()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _nothing_is_left_in_the_repository() -> Iterator[None]:
+    """A test writes into its tmp_path, never into the checkout (ignored outputs such as runs/ and MUJOCO_LOG.TXT included)."""
+    before = _repository_status()
+    yield
+    if before is None:
+        return
+    left = sorted(set(_repository_status() or []) - set(before))
+    assert not left, f"the tests left these in the repository (git status): {left}"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _work_in_a_temporary_directory(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """The session works in a temporary directory, and so does every process it starts (the CLI, the simulated robot):
+    whatever lands in the working directory (MuJoCo's MUJOCO_LOG.TXT on a warning) stays out of the repository."""
+    home = Path.cwd()
+    os.chdir(tmp_path_factory.mktemp("cwd"))
+    yield
+    os.chdir(home)
 
 
 @pytest.fixture(scope="session")
@@ -93,12 +134,12 @@ def linear_onnx(tmp_path: Path) -> Callable[..., Path]:
 
 
 G1CTL = [sys.executable, "-m", "controller.cli"]
-ROOT = Path(__file__).resolve().parent.parent  # the repository
 
 
 def g1ctl(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    """The real CLI in a subprocess, run from the repository."""
-    return subprocess.run([*G1CTL, *args], capture_output=True, text=True, cwd=ROOT, env={**os.environ, **(env or {})}, timeout=300)
+    """The real CLI in a subprocess, run in a fresh temporary directory (paths it is given are absolute)."""
+    with tempfile.TemporaryDirectory(prefix="g1ctl-cwd-") as cwd:
+        return subprocess.run([*G1CTL, *args], capture_output=True, text=True, cwd=cwd, env={**os.environ, **(env or {})}, timeout=300)
 
 
 def one_line_error(result: subprocess.CompletedProcess[str], code: int = 2) -> str:
@@ -125,8 +166,12 @@ def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: 
     return qpos
 
 
-def wait_for(condition: Callable[[], bool], timeout: float = 2.0) -> bool:
-    """Poll `condition` every 5 ms until it holds (True) or `timeout` s pass (False): for threads under test."""
+HANG_S = 10.0  # how long a test waits for what must happen: only a hang runs into it, a loaded machine is slow, not wrong
+
+
+def wait_for(condition: Callable[[], bool], timeout: float = HANG_S) -> bool:
+    """Poll `condition` every 5 ms until it holds (True) or `timeout` s pass (False): for threads, processes and
+    kernel buffers under test."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
@@ -146,20 +191,38 @@ def fake_embed(strings: list[str]) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-@pytest.fixture
-def sim_dds_config(tmp_path: Path) -> Callable[[int], Path]:
-    """A copy of the shipped sim-dds hardware config on its own DDS domain (`offset` picks among this run's domains).
+@pytest.fixture(scope="session")
+def claim_dds_domain() -> Iterator[Callable[[], int]]:
+    """A function that claims a DDS domain for this test session alone, as the product claims one for a simulated run
+    (`hw.dds.domains`): two test runs on one machine never hear each other, nor a simulated run beside them.
 
-    Two test runs on one machine (or two tests beside each other) must not hear each other's robots.
+    Every claim is held until the session ends, so no two tests share a domain either: Cyclone keeps a domain's
+    configuration for the life of the process, and a robot process of an earlier test may still be winding down.
     """
+    from hw.dds.domains import SPARE_DOMAINS, claim_domain
+
+    claims = []
+
+    def claim() -> int:
+        claims.append(claim_domain(SPARE_DOMAINS.start))
+        return claims[-1].domain
+
+    yield claim
+    for held in claims:
+        held.release()
+
+
+@pytest.fixture
+def sim_dds_config(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> Callable[[], Path]:
+    """A function that writes a copy of the shipped sim-dds hardware config on a DDS domain of its own (`claim_dds_domain`)."""
     from hw.shipped import config_dir
 
-    def on_domain(offset: int) -> Path:
+    def on_a_domain_of_its_own() -> Path:
         text = (config_dir("hardware") / "sim-dds.yaml").read_text()
-        domain = 20 + (os.getpid() * 7 + offset) % 200
+        domain = claim_dds_domain()
         path = tmp_path / f"sim-dds-{domain}.yaml"
         path.write_text(text.replace("dds: {domain: 1,", f"dds: {{domain: {domain},"))
         assert f"domain: {domain}," in path.read_text()
         return path
 
-    return on_domain
+    return on_a_domain_of_its_own

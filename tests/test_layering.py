@@ -348,11 +348,13 @@ def global_state_changed_by(modules: list[str]) -> dict[str, object]:
     return dict(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
+@pytest.mark.slow
 def test_importing_any_module_changes_no_global_state() -> None:
     """No environment variable set and no matplotlib backend chosen on import: that is for the
     function that renders or draws. The trainer's torch modules are checked by the next test."""
-    assert "controller.training.planner" in torch_modules()
-    modules = [m for m in modules_under(*PACKAGES) if m not in torch_modules()]
+    torch = torch_modules()
+    assert "controller.training.planner" in torch
+    modules = [m for m in modules_under(*PACKAGES) if m not in torch]
     assert global_state_changed_by(modules) == {"env": [], "backend_changed": False}
 
 

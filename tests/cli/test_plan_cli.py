@@ -9,8 +9,6 @@ import pytest
 
 from tests.conftest import g1ctl, one_line_error
 
-pytestmark = pytest.mark.slow
-
 
 def test_plan_prints_the_decomposition_without_running() -> None:
     result = g1ctl("plan", "Please walk forward two meters, then turn left 90 degrees, then wave with your right hand")
@@ -20,6 +18,7 @@ def test_plan_prints_the_decomposition_without_running() -> None:
     assert "wave_right" in result.stdout and "90" in result.stdout
 
 
+@pytest.mark.slow
 def test_plan_runs_in_simulation_and_reports_each_clause(tmp_path: Path) -> None:
     report_path = tmp_path / "plan.json"
     result = g1ctl("plan", "walk forward one meter and then wave with your left hand", "--sim", "--report", str(report_path))
@@ -44,6 +43,7 @@ def test_video_needs_a_simulated_run() -> None:
     assert "--sim" in one_line_error(g1ctl("plan", "wave", "--video", "x.mp4"))
 
 
+@pytest.mark.slow
 def test_text_bench_runs_a_suite(tmp_path: Path) -> None:
     suite = tmp_path / "suite.yaml"
     suite.write_text(

@@ -10,9 +10,8 @@ import pytest
 
 from tests.conftest import ROOT, g1ctl, one_line_error
 
-pytestmark = pytest.mark.slow  # every test runs the CLI in a subprocess
 
-
+@pytest.mark.slow
 def test_five_seconds_of_walking(tmp_path: Path) -> None:
     report_path = tmp_path / "report.json"
     result = g1ctl("sim", "--scenario", "walk_turn_stop", "--duration", "5", "--report", str(report_path))
@@ -28,6 +27,7 @@ def test_five_seconds_of_walking(tmp_path: Path) -> None:
     assert Path(report["plot"]).is_file() and Path(report["plot"]).stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_video_and_picture_are_written(tmp_path: Path) -> None:
     video, picture = tmp_path / "walk.gif", tmp_path / "last.png"
     result = g1ctl("sim", "--duration", "0.5", "--video", str(video), "--video-fps", "10", "--picture", str(picture))
@@ -36,6 +36,7 @@ def test_video_and_picture_are_written(tmp_path: Path) -> None:
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_nan_policy_is_held_then_damped_and_counted(tmp_path: Path) -> None:
     import numpy as np
 
@@ -58,6 +59,7 @@ def test_unknown_scenario_lists_valid_ones() -> None:
     assert "unknown scenario 'moonwalk'" in line and "walk_turn_stop" in line and "random_commands" in line
 
 
+@pytest.mark.slow
 def test_unknown_policy_lists_valid_ones() -> None:
     line = one_line_error(g1ctl("sim", "--policy", "sac"))
     assert "unknown policy 'sac'" in line and "fastsac" in line and "ppo" in line
@@ -70,6 +72,7 @@ def test_scenario_file_with_unknown_key(tmp_path: Path) -> None:
     assert str(bad) in line and "unknown key 'steps[0].vz'" in line
 
 
+@pytest.mark.slow
 def test_policy_yaml_with_mismatched_layout(tmp_path: Path) -> None:
     text = (ROOT / "configs" / "policies" / "fastsac.yaml").read_text()
     bad = tmp_path / "short.yaml"
@@ -86,6 +89,7 @@ def test_corrupt_asset_dir(tmp_path: Path, assets) -> None:
     assert "checksum mismatch for g1/g1_29dof.xml" in line
 
 
+@pytest.mark.slow
 def test_gamepad_absent_is_one_line() -> None:
     line = one_line_error(g1ctl("sim", "--input", "gamepad", "--duration", "1"))
     assert "gamepad" in line

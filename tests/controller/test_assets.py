@@ -36,6 +36,7 @@ def test_corrupt_local_asset_is_named(assets, tmp_path: Path) -> None:
         ensure_assets(local)
 
 
+@pytest.mark.slow
 def test_corrupt_cache_is_repaired_from_the_wheel(assets, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     cache = copy_assets(assets.root, tmp_path / "cache" / "g1ctl" / "assets")
     (cache / "policies" / "ppo_g1_29dof.onnx").write_bytes(b"corrupt")

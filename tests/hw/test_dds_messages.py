@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import os
-import time
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -16,6 +15,7 @@ from hw.dds.session import DdsConfig, DdsSession, domain_xml
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
 from hw.protocols.crc import FrameError
+from tests.conftest import HANG_S, wait_for
 
 
 def a_low_state() -> np.ndarray:
@@ -50,19 +50,21 @@ def test_config_mistakes_are_named() -> None:
     assert '<NetworkInterface name="eth0"/>' in domain_xml(DdsConfig(domain=0, interface="eth0", peers=()))
 
 
-def test_a_low_cmd_crosses_loopback_dds() -> None:
-    session = DdsSession(DdsConfig(domain=os.getpid() % 100, interface="lo"))  # its own domain per test run
+def test_a_low_cmd_crosses_loopback_dds(claim_dds_domain: Callable[[], int]) -> None:
+    session = DdsSession(DdsConfig(domain=claim_dds_domain(), interface="lo"))
     try:
         writer = session.writer("rt/lowcmd", m.LowCmd_)
         reader = session.reader("rt/lowcmd", m.LowCmd_)
         command = hg.unpack_low_cmd(hg.encode_motor_command(0, 1, 0.1, 0.0, 0.0, 40.0, 1.0, mode_machine=2))
         received = []
-        deadline = time.monotonic() + 5.0
-        while not received and time.monotonic() < deadline:  # discovery takes a moment
+
+        def came_back() -> bool:  # written until discovery is done
+            nonlocal received
             writer.write(m.low_cmd_from_record(command))
-            time.sleep(0.02)
             received = reader.take(N=1)
-        assert received, "no LowCmd_ came back over loopback in 5 s"
+            return bool(received)
+
+        assert wait_for(came_back), f"no LowCmd_ came back over loopback in {HANG_S} s"
         record = m.low_cmd_to_record(received[0])
         assert hg.crc_ok(record) and int(record["mode_machine"]) == 2 and float(record["motor_cmd"][0]["kp"]) == 40.0
     finally:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 
 import can
 import pytest
@@ -15,6 +14,7 @@ from hw.emulation.rig import SimulatedHardware
 from hw.errors import EmulatorError
 from hw.jointmap import load_hardware_config
 from hw.protocols import mit
+from tests.conftest import wait_for
 
 
 class ThreadFailingPlant(StaticPlant):
@@ -37,9 +37,7 @@ def test_an_emulator_thread_that_dies_makes_the_next_step_raise_naming_the_cause
             with caplog.at_level(logging.ERROR, logger="hw.emulation.firmware"):
                 # Entering motor mode makes the receive thread sample the motor: the plant raises there.
                 host.send(can.Message(arbitration_id=1, data=mit.ENTER_MOTOR_MODE, is_extended_id=False))
-                deadline = time.monotonic() + 2.0
-                while emulator.error is None and time.monotonic() < deadline:
-                    time.sleep(0.005)
+                assert wait_for(lambda: emulator.error is not None)
         finally:
             host.shutdown()
         assert isinstance(emulator.error, RuntimeError)

@@ -33,11 +33,11 @@ def test_outside_limits_allows_one_quantization_step_and_ignores_positions_witho
     q = np.array([hi + 5e-4, hi + 0.01, hi + 0.01, 0.5, np.nan])
     kp = np.array([40.0, 40.0, 0.0, 40.0, 40.0])  # the third is a damping command: its position means nothing
     tau = np.array([0.0, 0.0, 0.0, 1.5 * joint.torque_limit, 0.0])
-    assert limits().outside(i, q, np.zeros(5), kp, tau).tolist() == [False, True, False, True, True]
+    wire = limits()
+    assert wire.outside(i, q, np.zeros(5), kp, tau).tolist() == [False, True, False, True, True]
     rng = np.random.default_rng(0)  # one command at a time (a motor's control step) is judged by the same rule
     index = rng.integers(0, g1.NUM_JOINTS, 2000)
     q, dq, kp, tau = rng.uniform(-4, 4, 2000), rng.uniform(-40, 40, 2000), rng.choice([0.0, 40.0], 2000), rng.uniform(-150, 150, 2000)
-    wire = limits()  # loaded once: a config load per command made this test take 100 s
     one = [wire.outside_one(int(j), float(a), float(b), float(c), float(d)) for j, a, b, c, d in zip(index, q, dq, kp, tau, strict=True)]
     assert one == wire.outside(index, q, dq, kp, tau).tolist() and 0 < sum(one) < 2000
 

@@ -11,6 +11,7 @@ import numpy as np
 from hw.drivers import MitBusDriver, MitMotor
 from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
+from tests.conftest import HANG_S
 
 AK80_9 = mit.MitRanges(p_max=12.5, v_max=50.0, t_max=18.0, kp_max=500.0, kd_max=5.0)
 
@@ -26,7 +27,7 @@ def _rig() -> tuple[MitBusDriver, can.BusABC, MitReplyBank, FeedbackStore]:
 
 def _answer(motor_side: can.BusABC, position: float) -> None:
     """Read the commands on the bus and reply to each with `position`."""
-    while (cmd := motor_side.recv(timeout=0.05)) is not None:
+    while (cmd := motor_side.recv(timeout=HANG_S)) is not None:  # until motor 2, the last, is answered
         data = mit.encode_reply(AK80_9, "cubemars", cmd.arbitration_id, position, 0.0, 0.0)
         motor_side.send(can.Message(arbitration_id=cmd.arbitration_id, data=data, is_extended_id=False))
         if cmd.arbitration_id == 2:
@@ -43,7 +44,7 @@ def test_a_late_reply_never_stands_in_for_the_next_cycles_reply() -> None:
         _answer(motor_side, position=1.0)  # the replies come late
         driver.send_frames(batch)
         _answer(motor_side, position=2.0)  # this cycle's replies
-        driver.collect(time.monotonic() + 0.05)
+        driver.collect(time.monotonic() + HANG_S)  # returns once both replies are filed: the deadline only bounds a hang
         bank.publish(store, now=10.0)
         assert store.position.tolist() == [mit.decode_reply(AK80_9, "cubemars", _reply(2.0)).position] * 2
         assert driver.counters.late_replies == 2 and driver.counters.dropped == 2

@@ -13,6 +13,7 @@ import serial
 from hw.drivers import Rs485BusDriver
 from hw.feedback import FeedbackStore
 from hw.protocols import unitree_rs485 as rs485
+from tests.conftest import HANG_S, wait_for
 
 
 def _reply(position: float) -> bytes:
@@ -36,10 +37,9 @@ def test_a_late_reply_never_stands_in_for_the_next_command_of_the_same_motor(por
     driver = Rs485BusDriver("rs485", port, [3], [0], store)
     zeros = np.zeros(1)
     os.write(motor_side, _reply(1.0))  # the answer to an earlier command, come too late
-    time.sleep(0.01)
+    assert wait_for(lambda: port.in_waiting >= rs485.REPLY_SIZE)  # through the pseudo-terminal
     driver.send_arrays(zeros, zeros, zeros, zeros, zeros, enabled=True)
-    deadline = time.monotonic() + 0.05
-    assert driver.write_next(deadline)
+    assert driver.write_next(time.monotonic() + HANG_S)  # the reply below comes long before: the deadline only bounds a hang
     os.read(motor_side, rs485.COMMAND_SIZE)
     os.write(motor_side, _reply(2.0))  # this command's answer
     driver.read_pending()
@@ -54,9 +54,9 @@ def test_late_replies_alone_give_values_but_no_stamp(port_pair) -> None:  # type
     driver = Rs485BusDriver("rs485", port, [3], [0], store)
     zeros = np.zeros(1)
     os.write(motor_side, _reply(1.0))
-    time.sleep(0.01)
+    assert wait_for(lambda: port.in_waiting >= rs485.REPLY_SIZE)
     driver.send_arrays(zeros, zeros, zeros, zeros, zeros, enabled=True)
-    driver.collect(time.monotonic() + 0.005)  # the motor stays silent this cycle
+    driver.collect(time.monotonic() + 0.005)  # the motor stays silent this cycle: whatever the wait, no reply comes
     fb = store.feedback(0)
     assert fb.position == pytest.approx(rs485.decode_reply(_reply(1.0)).position)
     assert fb.stamp is None and fb.missed == 1

@@ -59,7 +59,6 @@ def test_latency_gains_noise_and_drops_sit_between_robot_and_controller(assets: 
     sim.close()
 
 
-@pytest.mark.slow  # three short runs of the simulator
 def test_a_hard_push_topples_the_robot_and_the_same_seed_gives_the_same_run(tmp_path: Path) -> None:
     hard = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.5))
     gentle = Perturbations(pushes=Pushes(force_n=60.0, duration_s=0.1, interval_s=2.0, start_s=1.5))

@@ -10,8 +10,6 @@ import pytest
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
 
-pytestmark = pytest.mark.slow  # benchmarks
-
 
 def test_loop_bench_reports_both_loops() -> None:
     report = run_loop_bench("fastsac", rounds=1, duration=2.0, assets_dir=None)
@@ -19,6 +17,7 @@ def test_loop_bench_reports_both_loops() -> None:
     assert report["ratio"] == pytest.approx(report["stack_rtf"] / report["minimal_rtf"], abs=2e-3)  # both sides rounded to 3 places
 
 
+@pytest.mark.slow
 def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     report = run_hw_bench(seconds=0.6, rt_priority=0, cpu=-1)  # pins nothing: the pytest process keeps its CPUs
     assert report["cycles"] > 100
@@ -27,12 +26,13 @@ def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     assert report["counters"]["crc_errors"] == 0
 
 
-def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callable[[int], Path]) -> None:
+@pytest.mark.slow
+def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callable[[], Path]) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from controller.bench.dds import run_dds_bench
 
-    report = run_dds_bench(seconds=1.0, rt_priority=0, cpu=-1, hardware=str(sim_dds_config(5)))
-    assert report["cycles"] > 300
+    report = run_dds_bench(seconds=1.0, rt_priority=0, cpu=-1, hardware=str(sim_dds_config()))
+    assert report["cycles"] > 250  # half of 500 Hz for 1 s: a loaded machine takes fewer
     assert set(report["cycle_ms"]) == set(report["raw_round_trip_ms"]) == set(report["raw_wire_round_trip_ms"]) == {"p50", "p99"}
     assert report["ratio"] == pytest.approx(report["cycle_ms"]["p50"] / report["raw_round_trip_ms"]["p50"], abs=2e-3)
     counters, robot = report["counters"], report["robot_process"]

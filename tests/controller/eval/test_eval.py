@@ -115,6 +115,7 @@ def test_the_faults_suite_drills_every_shipped_plan_on_the_hardware_it_names() -
         episodes(SuiteConfig(name="x", duration_s=1.0, perturbations={}))
 
 
+@pytest.mark.slow
 def test_drills_pass_and_a_drill_that_misses_its_stated_time_is_named(tmp_path: Path) -> None:
     impatient = tmp_path / "impatient-imu.yaml"  # the IMU times out after 50 ms: 10 ms cannot be met
     impatient.write_text("buses:\n  imu: {silent: true, start_s: 3.0}\nexpect: {outcome: damping, within_s: 0.01, names: IMU}\n")

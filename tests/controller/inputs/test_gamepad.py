@@ -7,7 +7,6 @@ import json
 import logging
 import os
 import queue
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import NamedTuple
@@ -182,10 +181,8 @@ def test_close_joins_the_reader_and_closes_the_device_once(pad: tuple[GamepadSou
     source, device = pad
     thread = source._thread
     assert thread.is_alive()
-    started = time.monotonic()
     source.close()
     assert not thread.is_alive() and device.closed
-    assert time.monotonic() - started < 0.5
     source.close()  # safe twice: the fake device asserts it is closed once
 
 

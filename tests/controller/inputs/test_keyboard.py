@@ -6,7 +6,6 @@ import io
 import logging
 import os
 import termios
-import time
 from collections.abc import Iterator
 
 import pytest
@@ -82,9 +81,8 @@ def test_source_reads_keys_and_close_joins_the_reader_and_restores_the_terminal(
     terminal.type("ww")
     assert wait_for(lambda: source.poll(0.0).velocity.vx == pytest.approx(0.2))
     thread = source._thread
-    started = time.monotonic()
     source.close()
-    assert not thread.is_alive() and time.monotonic() - started < 0.5
+    assert not thread.is_alive()
     assert termios.tcgetattr(terminal.slave) == before
     source.close()  # safe twice
     assert source.read_errors == 0

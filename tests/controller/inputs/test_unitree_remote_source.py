@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import time
@@ -22,9 +21,9 @@ from controller.inputs.unitree_remote import RemoteConfig, map_remote, remote_by
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
+from tests.conftest import HANG_S, wait_for
 
 LIMITS = CommandLimits(vx=(-0.6, 1.0), vy=(-0.5, 0.4), yaw_rate=(-1.2, 0.8))
-DOMAIN = 150 + os.getpid() % 50  # its own domain: two test runs on one machine must not hear each other
 Publish = Callable[..., None]
 
 
@@ -92,13 +91,19 @@ def test_the_robot_cli_feeds_a_scenario_as_remote_bytes(tmp_path: Path) -> None:
 
 
 @pytest.fixture
-def publish() -> Iterator[Publish]:
-    """A function that publishes one LowState_ carrying a remote (its CRC broken with `bad_crc`) on DOMAIN."""
+def domain(claim_dds_domain: Callable[[], int]) -> int:
+    """A DDS domain of the test's own."""
+    return claim_dds_domain()
+
+
+@pytest.fixture
+def publish(domain: int) -> Iterator[Publish]:
+    """A function that publishes one LowState_ carrying a remote (its CRC broken with `bad_crc`) on the test's `domain`."""
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from hw.dds import cdr, messages
     from hw.dds.session import DdsSession
 
-    session = DdsSession(DdsConfig(domain=DOMAIN, interface="lo"))
+    session = DdsSession(DdsConfig(domain=domain, interface="lo"))
     writer = session.writer("rt/lowstate", messages.LowState_)
 
     def send(sample: CommandSample, bad_crc: bool = False) -> None:
@@ -114,7 +119,7 @@ def publish() -> Iterator[Publish]:
 
 
 def poll_until(
-    source: CommandSource, cond: Callable[[CommandSample], bool], send: Callable[[], None] | None = None, timeout: float = 5.0
+    source: CommandSource, cond: Callable[[CommandSample], bool], send: Callable[[], None] | None = None, timeout: float = HANG_S
 ) -> CommandSample:
     """Send (when given) and poll every 10 ms until `cond(polled)` holds or `timeout` s pass; the last sample."""
     deadline = time.monotonic() + timeout
@@ -127,58 +132,58 @@ def poll_until(
         time.sleep(0.01)
 
 
-def test_open_input_reads_the_remote_on_the_hardware_configs_domain(tmp_path: Path) -> None:
+def test_open_input_reads_the_remote_on_the_hardware_configs_domain(tmp_path: Path, domain: int) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from controller.inputs.unitree_remote import UnitreeRemoteSource
     from hw.shipped import config_dir
 
     hardware = tmp_path / "remote-dds.yaml"
-    hardware.write_text((config_dir("hardware") / "sim-dds.yaml").read_text().replace("domain: 1,", f"domain: {DOMAIN},"))
+    hardware.write_text((config_dir("hardware") / "sim-dds.yaml").read_text().replace("domain: 1,", f"domain: {domain},"))
     with open_input("unitree-remote", LIMITS, "stand", 0.0, 0, str(hardware)) as source:
-        assert isinstance(source, UnitreeRemoteSource) and source._session.cfg.domain == DOMAIN
+        assert isinstance(source, UnitreeRemoteSource) and source._session.cfg.domain == domain
         assert not source.poll(0.0).alive  # no robot on this domain
 
 
-def test_the_source_reads_the_remote_and_goes_stale_when_states_stop(publish: Publish) -> None:
+def test_the_source_reads_the_remote_and_goes_stale_when_states_stop(publish: Publish, domain: int) -> None:
     from controller.inputs.unitree_remote import UnitreeRemoteSource
 
     walk = CommandSample(velocity=VelocityCommand(0.5, -0.2, 0.4), buttons=Buttons(start=True), gesture="wave")
-    with UnitreeRemoteSource(DdsConfig(domain=DOMAIN, interface="lo"), LIMITS, RemoteConfig(stale_timeout=0.2)) as source:
+    with UnitreeRemoteSource(DdsConfig(domain=domain, interface="lo"), LIMITS, RemoteConfig(stale_timeout=0.2)) as source:
         assert not source.poll(0.0).alive  # nothing heard yet
         got = poll_until(source, lambda s: s.alive, lambda: publish(walk))
         assert_same(got, walk)
-        stopped = time.monotonic()
-        got = poll_until(source, lambda s: not s.alive, timeout=2.0)
-        assert not got.alive and got.velocity == VelocityCommand() and time.monotonic() - stopped >= 0.2
+        got = poll_until(source, lambda s: not s.alive)
+        assert not got.alive and got.velocity == VelocityCommand() and time.monotonic() - source.state_time >= 0.2  # since the last state
         assert got.buttons == walk.buttons  # the last buttons still read (an e-stop held stays held)
 
 
-def test_states_with_a_bad_crc_are_counted_and_ignored(publish: Publish) -> None:
+def test_states_with_a_bad_crc_are_counted_and_ignored(publish: Publish, domain: int) -> None:
     from controller.inputs.unitree_remote import UnitreeRemoteSource
 
     stand = CommandSample()
-    with UnitreeRemoteSource(DdsConfig(domain=DOMAIN, interface="lo"), LIMITS, RemoteConfig(stale_timeout=0.3)) as source:
+    with UnitreeRemoteSource(DdsConfig(domain=domain, interface="lo"), LIMITS, RemoteConfig(stale_timeout=0.3)) as source:
         assert poll_until(source, lambda s: s.alive, lambda: publish(stand)).alive
         bad = CommandSample(velocity=VelocityCommand(1.0), buttons=Buttons(estop=True))
-        deadline = time.monotonic() + 1.0
         seen = []
-        while time.monotonic() < deadline:
+
+        def counted_until_stale() -> bool:  # bad states alone, until the remote is stale
             publish(bad, bad_crc=True)
             seen.append(source.poll(0.0))
-            time.sleep(0.01)
+            return source.crc_errors > 10 and not seen[-1].alive
+
+        assert wait_for(counted_until_stale)
         assert source.crc_errors > 10
         assert all(s.velocity == VelocityCommand() and not s.buttons.estop for s in seen)
         assert not seen[-1].alive  # bad states do not keep the remote alive
 
 
 @pytest.mark.slow  # a MuJoCo process on the wall clock
-def test_the_simulated_robot_sends_a_scenario_on_its_remote() -> None:
+def test_the_simulated_robot_sends_a_scenario_on_its_remote(domain: int) -> None:
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     from controller.inputs.unitree_remote import UnitreeRemoteSource
     from hw.dds import messages as m
     from hw.dds.session import DdsSession
 
-    domain = (DOMAIN + 60) % 233
     child = subprocess.Popen(
         [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "6", "--motion-mode", "",
          "--remote", "walk_turn_stop"],
@@ -188,13 +193,14 @@ def test_the_simulated_robot_sends_a_scenario_on_its_remote() -> None:
     session = DdsSession(dds)
     try:
         with UnitreeRemoteSource(dds, CommandLimits()) as source:
-            assert poll_until(source, lambda s: s.alive, timeout=5.0).alive
-            time.sleep(1.5)
+            states = session.reader("rt/lowstate", m.LowState_)
+            assert poll_until(source, lambda s: s.alive).alive
+            assert wait_for(lambda: any(isinstance(s, m.LowState_) and s.tick >= 1500 for s in states.take(N=10)))  # up 1.5 s
             assert source.poll(0.0).velocity == VelocityCommand()  # its time line waits for the first command
             command = hg.new_low_cmd(mode_machine=5)
             command["motor_cmd"]["mode"][:29], command["motor_cmd"]["kd"][:29] = 1, 1.0
             writer, message = session.writer("rt/lowcmd", m.LowCmd_), m.low_cmd_from_record(hg.with_crc(command))
-            got = poll_until(source, lambda s: s.velocity.vx > 0.0, lambda: writer.write(message), timeout=4.0)
+            got = poll_until(source, lambda s: s.velocity.vx > 0.0, lambda: writer.write(message))
             assert np.isclose(got.velocity.vx, 0.5, atol=1e-6) and got.alive  # walk_turn_stop: forward at 0.5 m/s from 1 s
     finally:
         session.close()

@@ -242,6 +242,7 @@ def test_bad_input_raises_an_error_naming_it() -> None:
     buffer.splice(walk(plan_times(end + 1 / FPS, 24)), end + 1 / FPS)  # one period after the end is still on time
 
 
+@pytest.mark.slow
 def test_memory_stays_bounded_over_10000_splices() -> None:
     buffer = ReferenceBuffer()
     plan_length, replan_period, look_ahead = 44, 0.1, 0.05

@@ -74,6 +74,7 @@ def test_targets_come_from_the_intended_pose(planner: Planner) -> None:
     assert reference.records[2].intended_start == pytest.approx((1.0, 0.0, math.radians(90.0)))
 
 
+@pytest.mark.slow
 def test_blended_joins_are_smoother_than_naive_ones(planner: Planner) -> None:
     scores = {}
     for blend in (8, None):

@@ -391,7 +391,6 @@ def test_real_holosoma_exports_load_and_act(assets) -> None:
 # -- the real policy on the simulated G1 -------------------------------------------------------
 
 
-@pytest.mark.slow
 def test_real_policy_stands_and_waves_with_the_planner() -> None:
     """The default preset (wbt_fastsac) on the shipped `wave` scenario, first 6 s: standing, the right hand waving."""
     from controller.runtime.sim_run import SimRunConfig, run
@@ -404,7 +403,6 @@ def test_real_policy_stands_and_waves_with_the_planner() -> None:
     assert np.hypot(*report["final_base_position"][:2]) < 0.3  # it stays where it stood (measured 0.05 m)
 
 
-@pytest.mark.slow
 def test_without_the_planner_the_run_is_refused_before_it_starts() -> None:
     from controller.runtime.sim_run import SimRunConfig, run
 
