@@ -10,9 +10,12 @@ the next replies carry.
 
 from __future__ import annotations
 
+import array
+import fcntl
 import logging
 import os
 import select
+import termios
 import threading
 import time
 
@@ -30,6 +33,8 @@ CAN_ERR_BUSOFF = 0x40
 CUBEMARS_OVER_TEMPERATURE = 1
 DAMIAO_COIL_OVER_TEMPERATURE = 0xC
 RS485_OVERHEAT = 1
+PTY_DELIVERY_TIMEOUT_S = 0.5  # how long an IMU frame may take to reach its reader through a pseudo-terminal
+PTY_DELIVERY_POLL_S = 5e-5
 
 log = logging.getLogger(__name__)
 
@@ -256,12 +261,18 @@ class Rs485PortEmulator(_Emulator):
 
 
 class ImuEmulator:
-    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal."""
+    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal.
 
-    def __init__(self, fd: int, plant: Plant, faults: FaultPlan | None = None) -> None:
+    `reader_fd` (the host's end): `emit()` returns once a frame's bytes can be read there. A pseudo-terminal hands
+    written bytes over from a kernel worker, which a loaded machine can hold back for tens of milliseconds: on the
+    simulated clock, which does not wait, that would read as an IMU gone stale; on a UART the frame is on the wire.
+    """
+
+    def __init__(self, fd: int, plant: Plant, faults: FaultPlan | None = None, reader_fd: int | None = None) -> None:
         self.fd = fd
         self.plant = plant
         self.faults = faults or FaultPlan()
+        self.reader_fd = reader_fd
         self.sequence = 0
         self.overflows = 0
         os.set_blocking(fd, False)
@@ -274,6 +285,17 @@ class ImuEmulator:
         sample = imu_frame.ImuSample(self.sequence, quat, gyro, acc)  # type: ignore[arg-type]
         self.sequence = (self.sequence + 1) & 0xFFFF
         try:
-            os.write(self.fd, self.faults.corrupt(imu_frame.encode_imu(sample)))
+            written = os.write(self.fd, self.faults.corrupt(imu_frame.encode_imu(sample)))
         except BlockingIOError:
             self.overflows += 1  # nobody reads: the frame is lost, as on a real UART
+            return
+        if self.reader_fd is not None:
+            _wait_readable(self.reader_fd, written)
+
+
+def _wait_readable(fd: int, count: int) -> None:
+    """Until `count` bytes wait to be read at `fd`, for at most PTY_DELIVERY_TIMEOUT_S (then its reader finds them missing)."""
+    waiting = array.array("i", [0])
+    deadline = time.monotonic() + PTY_DELIVERY_TIMEOUT_S
+    while fcntl.ioctl(fd, termios.FIONREAD, waiting) == 0 and waiting[0] < count and time.monotonic() < deadline:
+        time.sleep(PTY_DELIVERY_POLL_S)

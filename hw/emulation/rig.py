@@ -59,7 +59,7 @@ class SimulatedHardware:
                     self._fds += [master, slave]
                     host_buses[name] = dataclasses.replace(bus, port=os.ttyname(slave))
                     if cfg.imu is not None and cfg.imu.bus == name:
-                        self.imu = ImuEmulator(master, plant, plan)
+                        self.imu = ImuEmulator(master, plant, plan, reader_fd=slave)
                     else:
                         rs_motors = {
                             jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio, audit=self.audit)
