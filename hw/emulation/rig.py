@@ -74,7 +74,7 @@ class SimulatedHardware:
             emulator.start()
 
     def step(self) -> None:
-        """One physics step: the motors' control step, physics, then fresh status and IMU frames.
+        """One physics step: the motors' control step, physics, then fresh status and IMU frames (the IMU's readable by the host).
         Raises `EmulatorError` once an emulator's thread died: its motors would only go silent."""
         for emulator in self.emulators:
             if emulator.error is not None:
