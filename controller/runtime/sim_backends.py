@@ -103,7 +103,7 @@ class SimulatedHardwareBackend(HardwareBackend):
         plant = MuJoCoPlant(truth)
         self.twin = SimulatedHardware(cfg, plant, plans)
         try:
-            host = HardwareRobot(self.twin.host_config, stamp_clock=plant.time)
+            host = HardwareRobot(self.twin.host_config, stamp_clock=plant.time, await_replies=self.twin.await_replies)
         except Exception:
             self.twin.close()
             raise

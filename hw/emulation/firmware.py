@@ -20,6 +20,7 @@ import threading
 import time
 
 import can
+from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
 from hw.emulation.motor import EmulatedMotor
@@ -90,12 +91,17 @@ class _Emulator:
 
 
 class MitBusEmulator(_Emulator):
-    """MIT-mode motors on one virtual CAN bus; each answers only frames to its own id."""
+    """MIT-mode motors on one virtual CAN bus; each answers only frames to its own id.
+
+    `wait_answered()` returns once every frame on the bus has been answered, or its reply dropped: the host of a
+    simulated run then takes the replies without waiting on the wall clock, which a loaded machine would stretch
+    past the cycle's timeout (a reply delayed by a fault still comes after it).
+    """
 
     def __init__(
         self,
         name: str,
-        bus: can.BusABC,
+        bus: VirtualBus,
         motors: dict[int, tuple[EmulatedMotor, mit.MitRanges, mit.ReplyVariant]],
         plant: Plant,
         faults: FaultPlan | None = None,
@@ -107,35 +113,55 @@ class MitBusEmulator(_Emulator):
         self._status: dict[int, can.Message] = {}  # reply per motor, sampled at the last tick
         self._bus_off_sent = False
 
+    def wait_answered(self, timeout: float) -> None:
+        """Until every frame sent to the motors was answered or dropped (at most `timeout` s: a hung emulator)."""
+        inbox = self.bus.queue
+        with inbox.all_tasks_done:  # what `Queue.join()` waits on, with a timeout
+            inbox.all_tasks_done.wait_for(lambda: not inbox.unfinished_tasks or not self._thread.is_alive(), timeout)
+
     def _serve(self) -> None:
-        bus, motors, faults, pending, status = self.bus, self.motors, self.faults, self._pending, self._status
         while self._running:
-            msg = bus.recv(timeout=0.05)
-            if msg is None or msg.is_error_frame or msg.arbitration_id not in motors:
+            msg = self.bus.recv(timeout=0.05)
+            if msg is None:
                 continue
-            self.frames_in += 1
-            motor_id, data = msg.arbitration_id, bytes(msg.data)
-            if faults.bus_off:
-                if not self._bus_off_sent:
-                    bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
-                    self._bus_off_sent = True
-                continue
-            if len(data) != 8:
-                continue  # the firmware ignores malformed frames
-            if data[:7] == b"\xff" * 7:
-                self._special(motor_id, data)
-            else:
-                pending[motor_id] = data
-            if faults.drop_reply_prob and faults.drop():
-                continue
-            if faults.delay_reply_s:
-                time.sleep(faults.delay_reply_s)
-            if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
-                # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
-                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
-                continue
-            bus.send(status[motor_id])
-            self.frames_out += 1
+            answered = False
+            try:
+                answered = self._answer(msg)
+            finally:
+                if not answered:
+                    self.bus.queue.task_done()
+
+    def _answer(self, msg: can.Message) -> bool:
+        """Answer one frame; True when `msg` was marked done before a delayed reply (`wait_answered` does not wait for it)."""
+        bus, faults = self.bus, self.faults
+        if msg.is_error_frame or msg.arbitration_id not in self.motors:
+            return False
+        self.frames_in += 1
+        motor_id, data = msg.arbitration_id, bytes(msg.data)
+        if faults.bus_off:
+            if not self._bus_off_sent:
+                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
+                self._bus_off_sent = True
+            return False
+        if len(data) != 8:
+            return False  # the firmware ignores malformed frames
+        if data[:7] == b"\xff" * 7:
+            self._special(motor_id, data)
+        else:
+            self._pending[motor_id] = data
+        if faults.drop_reply_prob and faults.drop():
+            return False
+        delayed = bool(faults.delay_reply_s)
+        if delayed:
+            bus.queue.task_done()  # the host's cycle does not wait for a reply that comes late
+            time.sleep(faults.delay_reply_s)
+        if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
+            # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
+            bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
+            return delayed
+        bus.send(self._status[motor_id])
+        self.frames_out += 1
+        return delayed
 
     def _special(self, motor_id: int, data: bytes) -> None:
         motor = self.motors[motor_id][0]
