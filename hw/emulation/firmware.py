@@ -95,7 +95,7 @@ class MitBusEmulator(_Emulator):
 
     `wait_answered()` returns once every frame on the bus has been answered, or its reply dropped: the host of a
     simulated run then takes the replies without waiting on the wall clock, which a loaded machine would stretch
-    past the cycle's timeout (a reply delayed by a fault still comes after it).
+    past the cycle's timeout. Replies delayed by a fault are not waited for: on the simulated clock they come late.
     """
 
     def __init__(
@@ -115,6 +115,8 @@ class MitBusEmulator(_Emulator):
 
     def wait_answered(self, timeout: float) -> None:
         """Until every frame sent to the motors was answered or dropped (at most `timeout` s: a hung emulator)."""
+        if self.faults.delay_reply_s:
+            return
         inbox = self.bus.queue
         with inbox.all_tasks_done:  # what `Queue.join()` waits on, with a timeout
             inbox.all_tasks_done.wait_for(lambda: not inbox.unfinished_tasks or not self._thread.is_alive(), timeout)
@@ -124,44 +126,38 @@ class MitBusEmulator(_Emulator):
             msg = self.bus.recv(timeout=0.05)
             if msg is None:
                 continue
-            answered = False
             try:
-                answered = self._answer(msg)
+                self._answer(msg)
             finally:
-                if not answered:
-                    self.bus.queue.task_done()
+                self.bus.queue.task_done()  # answered, dropped or ignored: what `wait_answered` waits for
 
-    def _answer(self, msg: can.Message) -> bool:
-        """Answer one frame; True when `msg` was marked done before a delayed reply (`wait_answered` does not wait for it)."""
+    def _answer(self, msg: can.Message) -> None:
         bus, faults = self.bus, self.faults
         if msg.is_error_frame or msg.arbitration_id not in self.motors:
-            return False
+            return
         self.frames_in += 1
         motor_id, data = msg.arbitration_id, bytes(msg.data)
         if faults.bus_off:
             if not self._bus_off_sent:
                 bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
                 self._bus_off_sent = True
-            return False
+            return
         if len(data) != 8:
-            return False  # the firmware ignores malformed frames
+            return  # the firmware ignores malformed frames
         if data[:7] == b"\xff" * 7:
             self._special(motor_id, data)
         else:
             self._pending[motor_id] = data
         if faults.drop_reply_prob and faults.drop():
-            return False
-        delayed = bool(faults.delay_reply_s)
-        if delayed:
-            bus.queue.task_done()  # the host's cycle does not wait for a reply that comes late
+            return
+        if faults.delay_reply_s:
             time.sleep(faults.delay_reply_s)
         if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
             # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
             bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
-            return delayed
+            return
         bus.send(self._status[motor_id])
         self.frames_out += 1
-        return delayed
 
     def _special(self, motor_id: int, data: bytes) -> None:
         motor = self.motors[motor_id][0]
