@@ -199,9 +199,9 @@ def claim_dds_domain() -> Iterator[Callable[[], int]]:
     Every claim is held until the session ends, so no two tests share a domain either: Cyclone keeps a domain's
     configuration for the life of the process, and a robot process of an earlier test may still be winding down.
     """
-    from hw.dds.domains import SPARE_DOMAINS, claim_domain
+    from hw.dds.domains import SPARE_DOMAINS, DomainClaim, claim_domain
 
-    claims = []
+    claims: list[DomainClaim] = []
 
     def claim() -> int:
         claims.append(claim_domain(SPARE_DOMAINS.start))
