@@ -49,7 +49,7 @@ def _repository_status() -> list[str] | None:
     caches = (".venv", ".pytest_cache", ".mypy_cache", ".ruff_cache", "*.egg-info")
     excluded = [f":(exclude,glob){c}/**" for c in caches] + [":(exclude,glob)**/__pycache__/**"]
     status = subprocess.run(
-        ["git", "status", "--porcelain", "--untracked-files=all", "--ignored=traditional", "--", ".", *excluded],
+        ["git", "--no-optional-locks", "status", "--porcelain", "--untracked-files=all", "--ignored=traditional", "--", ".", *excluded],
         capture_output=True, text=True, cwd=ROOT, check=True, timeout=60,
     )  # fmt: skip
     return status.stdout.splitlines()
