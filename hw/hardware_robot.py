@@ -43,7 +43,10 @@ class HardwareRobot(LifecycleRobot):
         joint_names: tuple[str, ...] = g1.JOINT_NAMES,
         default_pose: tuple[float, ...] | None = None,
         stamp_clock: Callable[[], float] = time.monotonic,
+        await_replies: Callable[[], None] | None = None,
     ) -> None:
+        """`await_replies` (simulated hardware): returns once every frame sent on the CAN buses has been answered
+        or its reply dropped; the replies are then taken without waiting on the wall clock (`cycle_timeout`)."""
         gains = (np.array([cfg.joints[n].kp for n in joint_names]), np.array([cfg.joints[n].kd for n in joint_names]))
         pose = np.asarray(default_pose if default_pose is not None else g1.default_joint_vector(), float)
         super().__init__(joint_names, pose, stamp_clock, JointLimits.from_joint_map(joint_names, cfg.joints), gains, cfg.safety)
@@ -54,6 +57,7 @@ class HardwareRobot(LifecycleRobot):
         self._slot_of: dict[str, tuple[MitBusDriver | Rs485BusDriver, int]] = {}  # joint -> (driver, motor id)
         self.imu: SerialImu | None = None
         self._has_serial = False
+        self._await_replies = await_replies
 
     # -- lifecycle -------------------------------------------------------------------
     def configure(self, require_all: bool = True) -> None:
@@ -121,7 +125,7 @@ class HardwareRobot(LifecycleRobot):
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.send_special(mit.ENTER_MOTOR_MODE)
-                driver.collect(time.monotonic() + 0.05)
+                driver.collect(self._replies_deadline(time.monotonic() + 0.05))
         self._exchange(limp=True, timeout=0.05)
         return [f"{n} (bus {self.cfg.joints[n].bus}, id {self.cfg.joints[n].id})" for n in self._names if self.feedback(n).stamp is None]
 
@@ -158,7 +162,7 @@ class HardwareRobot(LifecycleRobot):
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.send_special(mit.EXIT_MOTOR_MODE)
-                driver.collect(time.monotonic() + self.cfg.safety.cycle_timeout)
+                driver.collect(self._replies_deadline(time.monotonic() + self.cfg.safety.cycle_timeout))
         self._exchange(limp=True)
         if self.state is not Lifecycle.ERROR:
             self.state = Lifecycle.INACTIVE
@@ -240,12 +244,20 @@ class HardwareRobot(LifecycleRobot):
             serial_drivers = [d for d in serial_drivers if d.write_next(deadline)]
             for driver in serial_drivers:
                 driver.read_pending()
+        deadline = self._replies_deadline(deadline)
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.collect(deadline)
         self._replies.publish(self.store, self.stamp_clock())
         if self.imu is not None:
             self.imu.poll()
+
+    def _replies_deadline(self, deadline: float) -> float:
+        """Until when CAN replies are waited for: `deadline`; on simulated hardware, now, once every reply that will come came."""
+        if self._await_replies is None:
+            return deadline
+        self._await_replies()
+        return time.monotonic()
 
     def _update_state(self) -> None:
         st = self.store

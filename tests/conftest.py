@@ -49,7 +49,7 @@ def _repository_status() -> list[str] | None:
     caches = (".venv", ".pytest_cache", ".mypy_cache", ".ruff_cache", "*.egg-info")
     excluded = [f":(exclude,glob){c}/**" for c in caches] + [":(exclude,glob)**/__pycache__/**"]
     status = subprocess.run(
-        ["git", "status", "--porcelain", "--untracked-files=all", "--ignored=traditional", "--", ".", *excluded],
+        ["git", "--no-optional-locks", "status", "--porcelain", "--untracked-files=all", "--ignored=traditional", "--", ".", *excluded],
         capture_output=True, text=True, cwd=ROOT, check=True, timeout=60,
     )  # fmt: skip
     return status.stdout.splitlines()
@@ -199,9 +199,9 @@ def claim_dds_domain() -> Iterator[Callable[[], int]]:
     Every claim is held until the session ends, so no two tests share a domain either: Cyclone keeps a domain's
     configuration for the life of the process, and a robot process of an earlier test may still be winding down.
     """
-    from hw.dds.domains import SPARE_DOMAINS, claim_domain
+    from hw.dds.domains import SPARE_DOMAINS, DomainClaim, claim_domain
 
-    claims = []
+    claims: list[DomainClaim] = []
 
     def claim() -> int:
         claims.append(claim_domain(SPARE_DOMAINS.start))

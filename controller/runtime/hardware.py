@@ -32,7 +32,7 @@ def open_hardware(name: str, assets_dir: str | None = None, require_all: bool = 
             robot = stack.enter_context(SimRobot(build_model(ensure_assets(assets_dir, quiet=True).g1_mjcf)))
             plant = MuJoCoPlant(robot, gantry_height=GANTRY_HEIGHT_M)
             rig = stack.enter_context(SimulatedHardware(cfg, plant))
-            host = stack.enter_context(HardwareRobot(rig.host_config, stamp_clock=plant.time))
+            host = stack.enter_context(HardwareRobot(rig.host_config, stamp_clock=plant.time, await_replies=rig.await_replies))
 
             def pump() -> None:
                 host.cycle()

@@ -9,7 +9,6 @@ per physics step (500 Hz), in lockstep with simulated time.
 from __future__ import annotations
 
 import dataclasses
-import time
 from typing import Any
 
 import numpy as np
@@ -35,8 +34,6 @@ SIM_CYCLE_TIMEOUT_S = 0.006
 # A robot that faulted (or never came up) stays as it is after the run: its motors are watched this
 # much longer, so the wire audit records what each did last (damped, or limp on its own watchdog).
 WATCH_AFTER_FAULT_S = 0.2
-# Simulated time waits this long (wall clock, at most) for each emulated IMU frame to reach the host.
-IMU_ARRIVAL_TIMEOUT_S = 0.05
 
 
 class DirectSimBackend(Backend):
@@ -106,11 +103,11 @@ class SimulatedHardwareBackend(HardwareBackend):
         plant = MuJoCoPlant(truth)
         self.twin = SimulatedHardware(cfg, plant, plans)
         try:
-            host = HardwareRobot(self.twin.host_config, stamp_clock=plant.time)
+            host = HardwareRobot(self.twin.host_config, stamp_clock=plant.time, await_replies=self.twin.await_replies)
         except Exception:
             self.twin.close()
             raise
-        super().__init__(host, hardware, now=lambda: truth.time, after_cycle=self._step_twin)
+        super().__init__(host, hardware, now=lambda: truth.time, after_cycle=self.twin.step)
         rng = np.random.default_rng(seed)
         self.pushes = PushForces(truth, push_schedule(perturbations.pushes if perturbations else None, duration, rng))
         self._wrappers: list[RobotInterface] = []  # outermost last: the controller writes into it
@@ -124,26 +121,6 @@ class SimulatedHardwareBackend(HardwareBackend):
     def cycle(self) -> None:
         self.pushes.apply()
         super().cycle()
-
-    def _step_twin(self) -> None:
-        """One physics step behind the emulators; then wait for the IMU frame it emitted to reach the host.
-
-        A pseudo-terminal hands bytes over in a kernel worker, which a loaded machine may run
-        tens of milliseconds late; simulated time must not run ahead of the wire meanwhile (a
-        real robot's does not), or the host would see a stale IMU that only the load made.
-        """
-        emitter = self.twin.imu
-        before = emitter.sequence if emitter is not None else None
-        self.twin.step()
-        imu = self.host.imu
-        if imu is None or emitter is None or emitter.sequence == before:
-            return  # no IMU yet, or it sent nothing (the silent-IMU drill)
-        sent = (emitter.sequence - 1) & 0xFFFF
-        deadline = time.monotonic() + IMU_ARRIVAL_TIMEOUT_S
-        imu.poll()
-        while (imu.latest is None or imu.latest.sequence != sent) and time.monotonic() < deadline:
-            time.sleep(50e-6)
-            imu.poll()
 
     def report(self) -> dict[str, Any]:
         return super().report() | {"wire": self.twin.audit.report()}
@@ -165,7 +142,7 @@ class SimulatedHardwareBackend(HardwareBackend):
                     if self.host.state is Lifecycle.ERROR:
                         self.cycle()  # the host keeps damping
                     else:
-                        self._step_twin()  # no bus open: the motors keep their own counsel
+                        self.twin.step()  # no bus open: the motors keep their own counsel
             for wrapper in reversed(self._wrappers):
                 wrapper.close()
             super().close()

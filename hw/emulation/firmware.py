@@ -10,13 +10,17 @@ the next replies carry.
 
 from __future__ import annotations
 
+import array
+import fcntl
 import logging
 import os
 import select
+import termios
 import threading
 import time
 
 import can
+from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
 from hw.emulation.motor import EmulatedMotor
@@ -30,6 +34,8 @@ CAN_ERR_BUSOFF = 0x40
 CUBEMARS_OVER_TEMPERATURE = 1
 DAMIAO_COIL_OVER_TEMPERATURE = 0xC
 RS485_OVERHEAT = 1
+PTY_DELIVERY_TIMEOUT_S = 0.5  # how long an IMU frame may take to reach its reader through a pseudo-terminal
+PTY_DELIVERY_POLL_S = 5e-5
 
 log = logging.getLogger(__name__)
 
@@ -85,12 +91,17 @@ class _Emulator:
 
 
 class MitBusEmulator(_Emulator):
-    """MIT-mode motors on one virtual CAN bus; each answers only frames to its own id."""
+    """MIT-mode motors on one virtual CAN bus; each answers only frames to its own id.
+
+    `wait_answered()` returns once every frame on the bus has been answered, or its reply dropped: the host of a
+    simulated run then takes the replies without waiting on the wall clock, which a loaded machine would stretch
+    past the cycle's timeout. Replies delayed by a fault are not waited for: on the simulated clock they come late.
+    """
 
     def __init__(
         self,
         name: str,
-        bus: can.BusABC,
+        bus: VirtualBus,
         motors: dict[int, tuple[EmulatedMotor, mit.MitRanges, mit.ReplyVariant]],
         plant: Plant,
         faults: FaultPlan | None = None,
@@ -102,35 +113,51 @@ class MitBusEmulator(_Emulator):
         self._status: dict[int, can.Message] = {}  # reply per motor, sampled at the last tick
         self._bus_off_sent = False
 
+    def wait_answered(self, timeout: float) -> None:
+        """Until every frame sent to the motors was answered or dropped (at most `timeout` s: a hung emulator)."""
+        if self.faults.delay_reply_s:
+            return
+        inbox = self.bus.queue
+        with inbox.all_tasks_done:  # what `Queue.join()` waits on, with a timeout
+            inbox.all_tasks_done.wait_for(lambda: not inbox.unfinished_tasks or not self._thread.is_alive(), timeout)
+
     def _serve(self) -> None:
-        bus, motors, faults, pending, status = self.bus, self.motors, self.faults, self._pending, self._status
         while self._running:
-            msg = bus.recv(timeout=0.05)
-            if msg is None or msg.is_error_frame or msg.arbitration_id not in motors:
+            msg = self.bus.recv(timeout=0.05)
+            if msg is None:
                 continue
-            self.frames_in += 1
-            motor_id, data = msg.arbitration_id, bytes(msg.data)
-            if faults.bus_off:
-                if not self._bus_off_sent:
-                    bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
-                    self._bus_off_sent = True
-                continue
-            if len(data) != 8:
-                continue  # the firmware ignores malformed frames
-            if data[:7] == b"\xff" * 7:
-                self._special(motor_id, data)
-            else:
-                pending[motor_id] = data
-            if faults.drop_reply_prob and faults.drop():
-                continue
-            if faults.delay_reply_s:
-                time.sleep(faults.delay_reply_s)
-            if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
-                # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
-                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
-                continue
-            bus.send(status[motor_id])
-            self.frames_out += 1
+            try:
+                self._answer(msg)
+            finally:
+                self.bus.queue.task_done()  # answered, dropped or ignored: what `wait_answered` waits for
+
+    def _answer(self, msg: can.Message) -> None:
+        bus, faults = self.bus, self.faults
+        if msg.is_error_frame or msg.arbitration_id not in self.motors:
+            return
+        self.frames_in += 1
+        motor_id, data = msg.arbitration_id, bytes(msg.data)
+        if faults.bus_off:
+            if not self._bus_off_sent:
+                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
+                self._bus_off_sent = True
+            return
+        if len(data) != 8:
+            return  # the firmware ignores malformed frames
+        if data[:7] == b"\xff" * 7:
+            self._special(motor_id, data)
+        else:
+            self._pending[motor_id] = data
+        if faults.drop_reply_prob and faults.drop():
+            return
+        if faults.delay_reply_s:
+            time.sleep(faults.delay_reply_s)
+        if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
+            # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
+            bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
+            return
+        bus.send(self._status[motor_id])
+        self.frames_out += 1
 
     def _special(self, motor_id: int, data: bytes) -> None:
         motor = self.motors[motor_id][0]
@@ -256,12 +283,18 @@ class Rs485PortEmulator(_Emulator):
 
 
 class ImuEmulator:
-    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal."""
+    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal.
 
-    def __init__(self, fd: int, plant: Plant, faults: FaultPlan | None = None) -> None:
+    `reader_fd` (the host's end): `emit()` returns once a frame's bytes can be read there. A pseudo-terminal hands
+    written bytes over from a kernel worker, which a loaded machine can hold back for tens of milliseconds: on the
+    simulated clock, which does not wait, that would read as an IMU gone stale; on a UART the frame is on the wire.
+    """
+
+    def __init__(self, fd: int, plant: Plant, faults: FaultPlan | None = None, reader_fd: int | None = None) -> None:
         self.fd = fd
         self.plant = plant
         self.faults = faults or FaultPlan()
+        self.reader_fd = reader_fd
         self.sequence = 0
         self.overflows = 0
         os.set_blocking(fd, False)
@@ -274,6 +307,17 @@ class ImuEmulator:
         sample = imu_frame.ImuSample(self.sequence, quat, gyro, acc)  # type: ignore[arg-type]
         self.sequence = (self.sequence + 1) & 0xFFFF
         try:
-            os.write(self.fd, self.faults.corrupt(imu_frame.encode_imu(sample)))
+            written = os.write(self.fd, self.faults.corrupt(imu_frame.encode_imu(sample)))
         except BlockingIOError:
             self.overflows += 1  # nobody reads: the frame is lost, as on a real UART
+            return
+        if self.reader_fd is not None:
+            _wait_readable(self.reader_fd, written)
+
+
+def _wait_readable(fd: int, count: int) -> None:
+    """Until `count` bytes wait to be read at `fd`, for at most PTY_DELIVERY_TIMEOUT_S (then its reader finds them missing)."""
+    waiting = array.array("i", [0])
+    deadline = time.monotonic() + PTY_DELIVERY_TIMEOUT_S
+    while fcntl.ioctl(fd, termios.FIONREAD, waiting) == 0 and waiting[0] < count and time.monotonic() < deadline:
+        time.sleep(PTY_DELIVERY_POLL_S)

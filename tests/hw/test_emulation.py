@@ -1,7 +1,9 @@
-"""Simulated hardware never fails silently: an emulator whose thread dies stops the run, naming why."""
+"""Simulated hardware never fails silently (an emulator whose thread dies stops the run, naming why), and it answers
+on the simulated clock: its host waits for the emulators, not for the wall clock."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import threading
 
@@ -12,7 +14,8 @@ from hw import g1
 from hw.emulation.plant import StaticPlant
 from hw.emulation.rig import SimulatedHardware
 from hw.errors import EmulatorError
-from hw.jointmap import load_hardware_config
+from hw.hardware_robot import HardwareRobot
+from hw.jointmap import HardwareConfig, load_hardware_config
 from hw.protocols import mit
 from tests.conftest import wait_for
 
@@ -47,3 +50,32 @@ def test_an_emulator_thread_that_dies_makes_the_next_step_raise_naming_the_cause
         assert caught.value.__cause__ is emulator.error
         with pytest.raises(EmulatorError):
             twin.step()  # and every step after it: the bus stays dead
+
+
+def _no_time_to_answer() -> HardwareConfig:
+    """sim-can with a cycle timeout no emulator thread can meet on the wall clock (a microsecond)."""
+    cfg = load_hardware_config("sim-can")
+    return dataclasses.replace(cfg, safety=dataclasses.replace(cfg.safety, cycle_timeout=1e-6))
+
+
+def test_the_host_of_simulated_hardware_waits_for_the_emulators_not_the_wall_clock() -> None:
+    plant = StaticPlant(dict.fromkeys(g1.JOINT_NAMES, 0.0))
+    with SimulatedHardware(_no_time_to_answer(), plant) as twin, HardwareRobot(twin.host_config, await_replies=twin.await_replies) as host:
+        host.configure()
+        for _ in range(50):
+            host.cycle()
+            twin.step()
+        counters = host.counters()
+        assert counters.frames_received >= 51 * g1.NUM_JOINTS and counters.dropped == 0 and counters.late_replies == 0
+
+
+def test_replies_delayed_by_a_fault_are_not_waited_for_on_the_simulated_clock() -> None:
+    plant = StaticPlant(dict.fromkeys(g1.JOINT_NAMES, 0.0))
+    cfg = _no_time_to_answer()
+    with SimulatedHardware(cfg, plant) as twin, HardwareRobot(twin.host_config, await_replies=twin.await_replies) as host:
+        host.configure()
+        twin.faults["can0"].delay_reply_s = 0.5  # far longer than the other buses take to answer
+        host.cycle()
+        twin.faults["can0"].delay_reply_s = 0.0
+        missed = {name: host.feedback(name).missed for name in g1.JOINT_NAMES}
+        assert missed == {name: int(joint.bus == "can0") for name, joint in cfg.joints.items()}  # can0's late, the rest on time
