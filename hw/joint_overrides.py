@@ -10,21 +10,11 @@ policies were trained on, is refused: one line naming the file, the joint and bo
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Protocol
+from typing import Any
 
 from hw.errors import ConfigError
 from hw.g1 import G1_JOINT, G1Joint
-
-
-class LimitedJoint(Protocol):
-    """What either joint-map kind (buses or DDS) holds of a joint's limits, joint side."""
-
-    @property
-    def position_limits(self) -> tuple[float, float]: ...
-    @property
-    def velocity_limit(self) -> float: ...
-    @property
-    def torque_limit(self) -> float: ...
+from hw.types import LimitedJoint
 
 
 def table_values(joint: G1Joint) -> dict[str, Any]:

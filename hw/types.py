@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,3 +64,14 @@ class JointCommand:
         """Zero stiffness, velocity damping only: the safe state of every joint."""
         zeros = np.zeros(n)
         return JointCommand(q=zeros, dq=zeros, kp=zeros, kd=np.broadcast_to(np.asarray(kd, float), (n,)).copy(), tau_ff=zeros)
+
+
+class LimitedJoint(Protocol):
+    """A joint's limits, joint side, as either joint-map kind holds them (a bus joint or a G1 joint over DDS)."""
+
+    @property
+    def position_limits(self) -> tuple[float, float]: ...
+    @property
+    def velocity_limit(self) -> float: ...
+    @property
+    def torque_limit(self) -> float: ...

@@ -18,9 +18,11 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
 import numpy as np
+
+from hw.types import LimitedJoint
 
 MotorState = Literal["active", "damping", "limp", "seized"]
 SAFE: frozenset[str] = frozenset({"damping", "limp"})
@@ -33,17 +35,6 @@ TOLERANCE_REL = 0.01
 TOLERANCE_ABS = 1e-3
 
 
-class JointMapEntry(Protocol):
-    """What the audit reads of a joint map entry (a bus joint or a G1 joint over DDS)."""
-
-    @property
-    def position_limits(self) -> tuple[float, float]: ...
-    @property
-    def velocity_limit(self) -> float: ...
-    @property
-    def torque_limit(self) -> float: ...
-
-
 @dataclass(frozen=True)
 class WireLimits:
     """The joint map's limits in joint order, widened by one quantization step."""
@@ -54,7 +45,7 @@ class WireLimits:
     tau_max: np.ndarray
 
     @staticmethod
-    def of(names: tuple[str, ...], joints: Mapping[str, JointMapEntry]) -> WireLimits:
+    def of(names: tuple[str, ...], joints: Mapping[str, LimitedJoint]) -> WireLimits:
         q = np.array([joints[n].position_limits for n in names], dtype=float)
         dq = np.array([joints[n].velocity_limit for n in names], dtype=float)
         tau = np.array([joints[n].torque_limit for n in names], dtype=float)
