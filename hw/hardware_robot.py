@@ -181,18 +181,21 @@ class HardwareRobot(LifecycleRobot):
         return self._slot_of[joint_name][0]
 
     def read(self) -> RobotState:
-        quat, gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
+        quat, gyro, accel = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), None
         if self.imu is not None and self.imu.latest is not None:
-            quat, gyro = np.array(self.imu.latest.quaternion), np.array(self.imu.latest.angular_velocity)
+            sample = self.imu.latest
+            quat, gyro, accel = np.array(sample.quaternion), np.array(sample.angular_velocity), np.array(sample.linear_acceleration)
         return RobotState(
             time=self.stamp_clock(),
             joint_pos=self._q.copy(),
             joint_vel=self._dq.copy(),
             base_quat=quat,
             base_ang_vel=gyro,
-            base_pos=np.zeros(3),  # no estimator on hardware yet
+            base_pos=np.zeros(3),  # the buses measure no base position: `controller.estimation` estimates it
             base_lin_vel=np.zeros(3),
             has_base_position=False,
+            imu_accel=accel,
+            joint_tau=self._tau.copy(),
         )
 
     def cycle(self) -> None:

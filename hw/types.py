@@ -18,7 +18,9 @@ class RobotState:
     Joint arrays follow the backend's joint order (names in `RobotInterface.joint_names`).
     `base_quat` is w, x, y, z of the pelvis in the world frame; `base_ang_vel` is the
     gyro reading in the pelvis frame. `base_pos`/`base_lin_vel` are world-frame and may be
-    estimates on hardware.
+    estimates on hardware. `imu_accel` is the IMU's specific force in the pelvis frame (m/s^2,
+    gravity included: +9.81 up at rest) and `joint_tau` each joint's measured torque (N m); None
+    where the robot does not report them.
     """
 
     time: float
@@ -29,6 +31,8 @@ class RobotState:
     base_pos: FloatArray
     base_lin_vel: FloatArray
     has_base_position: bool = True  # False where nothing estimates base_pos/base_lin_vel (they read zero)
+    imu_accel: FloatArray | None = None
+    joint_tau: FloatArray | None = None
 
 
 def read_only(values: FloatArray) -> FloatArray:

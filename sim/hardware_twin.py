@@ -50,11 +50,15 @@ class MuJoCoPlant:
         self._q[i], self._dq[i], self._kp[i], self._kd[i], self._tau[i] = q, dq, kp, kd, tau
 
     def imu_reading(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+        """Attitude, rates and the accelerometer's specific force (gravity included), as the pelvis IMU measures them."""
         d = self._data
-        w, x, y, z = d.qpos[g1.QPOS_ROOT_QUAT].tolist()
-        # Specific force of a body at rest: gravity reaction rotated into the IMU frame.
-        gx, gy, gz = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
-        return (w, x, y, z), tuple(d.qvel[g1.QVEL_ROOT_ANG].tolist()), (gx * GRAVITY_MPS2, gy * GRAVITY_MPS2, gz * GRAVITY_MPS2)
+        accel = self.robot.imu_accel() if self._gantry is None else self._at_rest_accel()
+        return tuple(d.qpos[g1.QPOS_ROOT_QUAT].tolist()), tuple(d.qvel[g1.QVEL_ROOT_ANG].tolist()), tuple(accel.tolist())
+
+    def _at_rest_accel(self) -> np.ndarray:
+        """On the gantry the pelvis is held still: the accelerometer feels gravity's reaction only."""
+        w, x, y, z = self._data.qpos[g1.QPOS_ROOT_QUAT].tolist()
+        return GRAVITY_MPS2 * np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
 
     def step(self) -> None:
         with self.lock:

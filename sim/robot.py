@@ -13,6 +13,8 @@ from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import FloatArray, JointCommand, RobotState
 
+IMU_ACCELEROMETER = "base_accel"  # the G1 model's accelerometer at the pelvis IMU (site imu_in_pelvis, axes the pelvis's)
+
 
 @dataclass(frozen=True)
 class FallConfig:
@@ -37,6 +39,8 @@ class SimRobot(RobotInterface):
         if model.nu != constants.NUM_JOINTS:
             raise ConfigError(f"G1 model has {model.nu} actuators, expected {constants.NUM_JOINTS}")
         self._torso_id = model.body(constants.TORSO_BODY).id
+        accel = model.sensor(IMU_ACCELEROMETER)
+        self._accel_adr = slice(int(model.sensor_adr[accel.id]), int(model.sensor_adr[accel.id]) + 3)
         self._cos_max_tilt = float(np.cos(np.deg2rad(fall.max_tilt_deg)))
         self._gains: tuple[FloatArray | None, FloatArray | None] = (None, None)
         self.reset()
@@ -82,7 +86,13 @@ class SimRobot(RobotInterface):
             base_ang_vel=d.qvel[constants.QVEL_ROOT_ANG].copy(),  # free-joint angular velocity is in the body frame
             base_pos=d.qpos[constants.QPOS_ROOT_POS].copy(),
             base_lin_vel=d.qvel[constants.QVEL_ROOT_LIN].copy(),
+            imu_accel=self.imu_accel(),
+            joint_tau=d.actuator_force[self._act_ids].copy(),
         )
+
+    def imu_accel(self) -> FloatArray:
+        """The pelvis IMU's accelerometer (specific force in its frame, gravity included), as of the last physics step."""
+        return self.data.sensordata[self._accel_adr].copy()
 
     def write(self, command: JointCommand) -> None:
         """Load the PD law into the actuators: force = kp q* + kd dq* + tau - kp q - kd dq."""

@@ -78,7 +78,7 @@ class DdsRobot(LifecycleRobot):
         self.link: DdsLink | None = None
         self._closed_counters = LinkCounters()
         n = len(joint_names)
-        self._quat, self._gyro = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3)
+        self._quat, self._gyro, self._accel = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3)
         self._temperature, self._error_bits = np.zeros(n), np.zeros(n, dtype=np.uint32)
         self._applied: JointArrays | None = None  # the state the joint arrays were last filled from
         self._template = hg.new_low_cmd(mode_pr=cfg.mode_pr)
@@ -197,7 +197,7 @@ class DdsRobot(LifecycleRobot):
         self._q[:], self._dq[:], self._tau[:] = motion[:, 0], motion[:, 1], motion[:, 3]
         self._temperature[:] = arrays.temperature.max(axis=1)
         self._error_bits[:] = arrays.motorstate
-        self._quat[:], self._gyro[:] = arrays.imu[:4], arrays.imu[4:7]
+        self._quat[:], self._gyro[:], self._accel[:] = arrays.imu[:4], arrays.imu[4:7], arrays.imu[7:10]
 
     def _check_feedback(self) -> list[str]:
         """Everything wrong with the robot's state now (activation, re-arm): the cycle's checks and non-finite values."""
@@ -273,6 +273,8 @@ class DdsRobot(LifecycleRobot):
             base_pos=np.zeros(3),  # the low-level state has no base position
             base_lin_vel=np.zeros(3),
             has_base_position=False,
+            imu_accel=self._accel.copy(),
+            joint_tau=self._tau.copy(),
         )
 
     def joints(self) -> list[JointReading]:
