@@ -78,23 +78,25 @@ def minimal_loop_rtf(policy_name: str, duration: float, assets_dir: str | None) 
     return duration / wall
 
 
-def stack_rtf(policy_name: str, duration: float, assets_dir: str | None) -> float:
-    report = run(SimRunConfig(scenario="walk_turn_stop", policy=policy_name, duration=duration, assets_dir=assets_dir))
+def stack_rtf(policy_name: str, duration: float, assets_dir: str | None, estimator: bool = False) -> float:
+    report = run(SimRunConfig(scenario="walk_turn_stop", policy=policy_name, duration=duration, assets_dir=assets_dir, estimator=estimator))
     if report["falls"]:
         raise RuntimeError("the stack's robot fell during the benchmark")
     return float(report["real_time_factor"])
 
 
-def run_loop_bench(policy_name: str, rounds: int, duration: float, assets_dir: str | None) -> dict[str, Any]:
+def run_loop_bench(policy_name: str, rounds: int, duration: float, assets_dir: str | None, estimator: bool = False) -> dict[str, Any]:
+    """`estimator`: the stack runs the state estimator (as on hardware), the minimal loop does not."""
     stack, minimal = [], []
     for _ in range(max(rounds, 1)):
         minimal.append(minimal_loop_rtf(policy_name, duration, assets_dir))
-        stack.append(stack_rtf(policy_name, duration, assets_dir))
+        stack.append(stack_rtf(policy_name, duration, assets_dir, estimator))
     best_stack, best_minimal = max(stack), max(minimal)
     return {
         "benchmark": "loop",
         "policy": policy_name,
         "scenario": "walk_turn_stop",
+        "estimator": estimator,
         "sim_seconds": duration,
         "rounds": len(stack),
         "stack_rtf": round(best_stack, 3),

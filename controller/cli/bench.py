@@ -1,6 +1,7 @@
 """`g1ctl bench ...`: benchmarks, each printing and writing a JSON report.
 
-g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S]
+g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S] [--estimator]
+g1ctl bench estimator [--report PATH] [--hardware sim-can,sim-dds] [--cases NAMES] [--seed 1]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
@@ -28,6 +29,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     loop.add_argument("--policy", default="fastsac")
     loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
     loop.add_argument("--duration", type=float, default=20.0)
+    loop.add_argument("--estimator", action="store_true", help="the stack runs the state estimator, as on hardware")
+
+    estimator = bench_sub.add_parser("estimator", help="the state estimator against the simulator's truth: drift, heading, velocity, cost")
+    estimator.add_argument("--report", type=Path, default=None)
+    estimator.add_argument("--hardware", default="sim-can,sim-dds", help="comma-separated: sim (the simulator with --estimator), sim-can, ...")
+    estimator.add_argument("--cases", default=None, help="comma-separated case names (default: all; see the printed table)")
+    estimator.add_argument("--seed", type=int, default=1)
 
     hw_bench = bench_sub.add_parser("hw", help="host bus cycle at 500 Hz against a raw python-can round trip, both in every period")
     hw_bench.add_argument("--report", type=Path, default=None)
@@ -88,9 +96,11 @@ def run(args: argparse.Namespace) -> int:
         return _text(args)
     if args.bench_command == "caption":
         return _caption(args)
+    if args.bench_command == "estimator":
+        return _estimator(args)
     from controller.bench.loop import run_loop_bench  # noqa: PLC0415 - imports MuJoCo
 
-    _emit(run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir), args.report)
+    _emit(run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir, args.estimator), args.report)
     return 0
 
 
@@ -127,6 +137,18 @@ def _text(args: argparse.Namespace) -> int:
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
     _save(report, args.report)
     return 0
+
+
+def _estimator(args: argparse.Namespace) -> int:
+    import sys  # noqa: PLC0415
+
+    from controller.bench import estimator as be  # noqa: PLC0415 - imports MuJoCo
+
+    cases = be.select_cases(args.hardware.split(","), args.cases.split(",") if args.cases else None)
+    report = be.run_estimator_bench(cases, args.seed, args.assets_dir, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    print(be.format_table(report))
+    _save(report, args.report)
+    return 0 if report["targets_met"] else 1
 
 
 def _caption(args: argparse.Namespace) -> int:

@@ -42,6 +42,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--headless", action="store_true", help="no viewer even where a display exists")
     run.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     run.add_argument("--seed", type=int, default=0)
+    run.add_argument(
+        "--estimator", action="store_true", help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)"
+    )
+    run.add_argument("--estimator-config", default=None, help="the state estimator's YAML (default: configs/estimator.yaml)")
     run.add_argument("--rt-priority", type=int, default=0, help="on a real G1: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
     run.add_argument("--cpu", type=int, default=None, help="on a real G1: pin the run to this CPU")
 
@@ -61,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
         assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(), rt_priority=args.rt_priority, cpu=args.cpu,
+        estimator=args.estimator, estimator_config=args.estimator_config,
     )  # fmt: skip
     if not on_robot and (args.rt_priority or args.cpu is not None):
         raise ConfigError("--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy)")

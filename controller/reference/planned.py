@@ -50,6 +50,8 @@ class PlannedReferenceConfig:
 class PlannedReference(ReferenceSource):
     """Plans from the command, replanned at 10 Hz, read by time from the buffer."""
 
+    needs_base_position = True  # plans are re-anchored on the measured root
+
     def __init__(
         self,
         plan: Callable[[PlanRequest], Plan],  # the planner: controller.planner.runtime.Planner.plan

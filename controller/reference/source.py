@@ -6,14 +6,20 @@ The session asks its source for the window of each tick; it never knows which on
 from __future__ import annotations
 
 import abc
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controller.commands.velocity import VelocityCommand
 from controller.reference.window import ReferenceWindow
 from hw.types import RobotState
 
+if TYPE_CHECKING:
+    from controller.reference.waypoints import WaypointFollower
+
 
 class ReferenceSource(abc.ABC):
+    needs_base_position = False  # True: it walks to positions (waypoints, re-anchored plans), so it stands when the estimate fails
+    follower: WaypointFollower | None = None  # the waypoints it walks to, if any (their errors are judged by the truth too)
+
     def start(self, state: RobotState) -> None:  # noqa: B027 - optional: most sources need no starting pose
         """The run begins with the robot in `state`."""
 

@@ -98,6 +98,8 @@ class WaypointError:
 
     position_m: float
     heading_deg: float
+    time: float  # when it settled (run time line)
+    target: tuple[float, float, float]  # x, y (m), heading (rad)
 
 
 class WaypointFollower:
@@ -146,7 +148,8 @@ class WaypointFollower:
             return ZERO
         distance, heading_error = self.errors_to(state)
         if self._settled(state, distance, heading_error):
-            self.errors.append(WaypointError(round(distance, 4), round(math.degrees(abs(heading_error)), 3)))
+            target = self.targets[self.index]
+            self.errors.append(WaypointError(round(distance, 4), round(math.degrees(abs(heading_error)), 3), state.time, target))
             self.index += 1
             self._hold_position = self._hold_heading = False
             if self.done:
@@ -240,7 +243,7 @@ def _check_position(state: RobotState) -> None:
     if not state.has_base_position:
         raise ConfigError(
             "the waypoints mode walks to positions, but this robot's state has no base position estimate "
-            "(hardware: not yet); run waypoints on the simulator directly"
+            "(the simulator gives it; elsewhere the state estimator does: --estimator)"
         )
 
 
@@ -249,6 +252,8 @@ class WaypointReference(ReferenceSource):
 
     The supervised velocity is not used: a waypoint scenario's own steps command zero.
     """
+
+    needs_base_position = True
 
     def __init__(self, follower: WaypointFollower) -> None:
         self.follower = follower

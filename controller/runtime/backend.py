@@ -18,6 +18,7 @@ from hw.types import RobotState
 class Backend(abc.ABC):
     robot: RobotInterface  # what the controller reads and writes
     paced_on_wall_clock = False  # True: `advance_to` waits for the wall clock itself (a robot that runs on its own)
+    measures_base_position = False  # True: the robot's state carries the base position and velocity (the simulator's)
 
     def start(self) -> None:  # noqa: B027 - optional: most backends are ready once built
         """Bring the robot up (hardware: configure, soft start); a fault here ends the run like any other."""
@@ -32,6 +33,10 @@ class Backend(abc.ABC):
 
     def truth(self) -> RobotState | None:
         """Ground truth where a simulator stands behind the robot (for metrics); None otherwise."""
+        return None
+
+    def truth_contacts(self) -> tuple[bool, bool] | None:
+        """The simulator's foot contacts (left, right), to judge an estimator's; None without a simulator."""
         return None
 
     def has_fallen(self) -> bool:

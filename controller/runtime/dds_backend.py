@@ -211,6 +211,9 @@ class SimulatedDdsBackend(DdsBackend):
     def truth(self) -> RobotState:
         return self.mirror.read()
 
+    def truth_contacts(self) -> tuple[bool, bool] | None:
+        return self.mirror.foot_contacts() if self.truth_time is not None else None
+
     def has_fallen(self) -> bool:
         return self.truth_time is not None and self.mirror.has_fallen()
 

@@ -23,6 +23,7 @@ from controller.inputs.registry import open_input
 from controller.inputs.scripted import load_scenario
 from controller.reports import write_report
 from controller.runtime.dds_backend import DdsBackend
+from controller.runtime.estimation import attach_estimator
 from controller.runtime.loop import RateLoop, RunClock, SimulationClock
 from controller.runtime.run_config import SimRunConfig
 from controller.runtime.session import Session
@@ -86,7 +87,8 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
             planned = PlannedReference(planner.plan, simulated_clock=False, joint_limits=(limits[:, 0], limits[:, 1]), seed=cfg.seed)
             stack.callback(planned.close)
             reference = planned
-        session = Session(backend, tracker, source, reference)
+        estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)  # a robot: always
+        session = Session(backend, tracker, source, reference, estimated)
         status = StatusLine(sys.stderr) if cfg.status else None
         loop = RateLoop(SimulationClock(backend.now, backend.advance_to), tracker.rate_hz)
         wall_start = time.perf_counter()

@@ -37,3 +37,5 @@ class SimRunConfig:
     perturbations: Perturbations | None = None  # pushes, friction, payload, motor strength, latency, noise (`sim.perturbations`)
     rt_priority: int = 0  # on a real robot: SCHED_FIFO priority of the run (0: normal scheduling), see hw.realtime
     cpu: int | None = None  # on a real robot: pin the run to this CPU
+    estimator: bool = False  # estimate the base position on the simulator too (every other robot always runs the estimator)
+    estimator_config: str | None = None  # the estimator's YAML (None: configs/estimator.yaml)

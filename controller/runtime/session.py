@@ -8,31 +8,48 @@ real hardware through a `Backend`.
 
 from __future__ import annotations
 
+import logging
 import time
 from typing import Any
 
+from controller.commands.velocity import VelocityCommand
 from controller.inputs.base import CommandSource
 from controller.reference.source import CommandReference, ReferenceSource
 from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
+from controller.runtime.estimation import EstimatedRobot, EstimateJudge
 from controller.runtime.supervisor import Mode, Supervisor
 from controller.runtime.tracking_metrics import PlanTrackingMetrics, TrackingMetrics, command_response_s
 from controller.tracking.tracker import Tracker
+from hw.robot import RobotInterface
+from hw.types import RobotState
+
+log = logging.getLogger(__name__)
 
 
 class Session:
-    def __init__(self, backend: Backend, tracker: Tracker, source: CommandSource, reference: ReferenceSource | None = None) -> None:
+    def __init__(
+        self, backend: Backend, tracker: Tracker, source: CommandSource, reference: ReferenceSource | None = None,
+        estimated: EstimatedRobot | None = None,
+    ) -> None:  # fmt: skip
+        """`estimated`: the backend's robot read through a state estimator, what the controller sees instead; its fault
+        holds position-based references, and where a simulator stands behind the robot the estimate is judged by its truth."""
         self.backend = backend
+        self.robot: EstimatedRobot | RobotInterface = estimated if estimated is not None else backend.robot
         self.tracker = tracker
         self.source = source
         self.reference = reference or CommandReference()
         self.supervisor = Supervisor()
-        self.metrics = TrackingMetrics()
+        self.metrics = TrackingMetrics()  # judged by the truth where there is one, else by what the controller sees
         self.plan_metrics = PlanTrackingMetrics()
+        self.estimated = estimated
+        self.estimate_metrics = TrackingMetrics() if estimated is not None else None  # the same, as the estimate sees it
+        self.estimate_judge = EstimateJudge() if estimated is not None else None
         self.step_times: list[float] = []  # seconds per tracker step (observation + inference + command)
         self.falls: list[float] = []  # run time of each fall
         self.damp_time: float | None = None  # run time at which the robot was last put into damping
+        self.hold_time: float | None = None  # run time at which a failed estimate made the robot stand
         self.start_time = backend.now()
         self.ticks = 0
         self.last_window: ReferenceWindow | None = None  # for displays: the plan being tracked, the command
@@ -41,19 +58,22 @@ class Session:
         """Bring the backend up; run time counts from here (hardware: after the soft start)."""
         self.backend.start()
         self.start_time = self.backend.now()
-        self.reference.start(self.backend.robot.read())
+        self.reference.start(self.robot.read())
 
     def tick(self) -> bool:
         """One control period; False when the run cannot go on (a fall that software cannot undo)."""
         backend, tracker, supervisor = self.backend, self.tracker, self.supervisor
-        state = backend.robot.read()
+        state = self.robot.read()
         sample = self.source.poll(state.time)
         was_damping = supervisor.mode is Mode.DAMP
         velocity = supervisor.update(sample, tracker.latched_fault or backend.fault())
         if supervisor.mode is Mode.DAMP and not was_damping:
             self.damp_time = round(state.time - self.start_time, 4)
-        measured = backend.truth() or state  # metrics use the simulator's ground truth where there is one
+        truth = backend.truth()
+        measured = truth or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
+        if self.estimated is not None:
+            self._watch_estimate(state, truth, velocity)
         running = supervisor.mode is Mode.RUN
         window = self.reference.window(state, velocity, sample.gesture if running else "", hold=not running)
         self.last_window = window
@@ -62,7 +82,7 @@ class Session:
         t0 = time.perf_counter()
         command = tracker.damping_command() if supervisor.mode is Mode.DAMP else tracker.step(state, window)
         self.step_times.append(time.perf_counter() - t0)
-        backend.robot.write(command)
+        self.robot.write(command)
         self.ticks += 1
         if backend.has_fallen():
             self.falls.append(round(state.time - self.start_time, 3))
@@ -70,8 +90,25 @@ class Session:
                 return False  # damped on purpose, or on hardware: nothing left to run
             tracker.reset()
             self.metrics.reset_reference()
-            self.reference.start(backend.robot.read())
+            if self.estimated is not None and self.estimate_metrics is not None:
+                self.estimated.reset()
+                self.estimate_metrics.reset_reference()
+            self.reference.start(self.robot.read())
         return True
+
+    def _watch_estimate(self, estimate: RobotState, truth: RobotState | None, velocity: VelocityCommand) -> None:
+        """The estimate's own view of the tracking, its judgement by the truth, and a hold once it fails."""
+        assert self.estimated is not None and self.estimate_metrics is not None and self.estimate_judge is not None
+        estimator = self.estimated.estimator
+        self.estimate_metrics.record(estimate.time, estimate.base_pos, estimate.base_quat, velocity)
+        if truth is not None:
+            self.estimate_judge.record(estimate, truth, estimator.contacts, self.backend.truth_contacts())
+        fault = estimator.fault
+        if fault is not None and self.reference.needs_base_position and not self.supervisor.hold_reason:
+            reason = f"state estimate lost ({fault}): standing, nothing walks to a position any more"
+            log.error("%s", reason)
+            self.supervisor.hold(reason)
+            self.hold_time = round(estimate.time - self.start_time, 4)
 
     def fail(self, reason: str) -> None:
         """A fault outside the tick (bring-up): damp, latched, with the reason in the report."""
@@ -95,12 +132,35 @@ class Session:
             "final_mode": supervisor.mode.value,
             "damp_reason": supervisor.damp_reason,
             "damp_time": self.damp_time,
+            "hold_reason": supervisor.hold_reason or None,
+            "hold_time": self.hold_time,
             "estops": supervisor.estops,
             "input_losses": supervisor.input_losses,
         }
         if self.plan_metrics.times:
             report |= self.plan_metrics.report()
-        return report | self.reference.report()
+        report |= self.reference.report()
+        if self.estimated is not None:
+            report |= self._estimate_report(report)
+        return report
+
+    def _estimate_report(self, report: dict[str, Any]) -> dict[str, Any]:
+        """The `estimator` block; the estimate's view of the tracking beside the truth's (or, with no truth, as the figures)."""
+        assert self.estimated is not None and self.estimate_metrics is not None and self.estimate_judge is not None
+        block = self.estimated.report() | self.estimate_judge.report()
+        view = {
+            "velocity_error_mean": round(self.estimate_metrics.velocity_error_mean, 4),
+            "yaw_rate_error_mean": round(self.estimate_metrics.yaw_rate_error_mean, 4),
+        }
+        if not self.estimate_judge.report():  # no truth: the estimate is all there is
+            return {"estimator": block, "measured_by": "estimate"}
+        judged: dict[str, Any] = {}
+        follower = self.reference.follower
+        if follower is not None and "waypoint_errors" in report:
+            view["waypoint_errors"] = report["waypoint_errors"]  # the follower's own, from the estimate
+            judged["waypoint_errors"] = self.estimate_judge.waypoint_errors(follower.errors)
+        block["controller_view"] = view
+        return {"estimator": block, "measured_by": "truth"} | judged
 
     @property
     def ended_in_fault(self) -> bool:

@@ -37,12 +37,20 @@ WATCH_AFTER_FAULT_S = 0.2
 
 
 class DirectSimBackend(Backend):
+    measures_base_position = True
+
     def __init__(self, truth: SimRobot) -> None:
         self.sim = truth
         self.robot = truth
 
     def now(self) -> float:
         return self.sim.time
+
+    def truth(self) -> RobotState:
+        return self.sim.read()
+
+    def truth_contacts(self) -> tuple[bool, bool]:
+        return self.sim.foot_contacts()
 
     def advance_to(self, t: float) -> None:
         self.sim.step_until(t)
@@ -75,9 +83,6 @@ class PerturbedSimBackend(DirectSimBackend):
             self.pushes.apply()
         self.pushes.apply()
         self.sim.step_until(t)
-
-    def truth(self) -> RobotState:
-        return self.sim.read()
 
     def close(self) -> None:
         if self.robot is not self.sim:
@@ -127,6 +132,9 @@ class SimulatedHardwareBackend(HardwareBackend):
 
     def truth(self) -> RobotState:
         return self.sim.read()
+
+    def truth_contacts(self) -> tuple[bool, bool]:
+        return self.sim.foot_contacts()
 
     def has_fallen(self) -> bool:
         return self.sim.has_fallen()

@@ -25,6 +25,7 @@ from controller.inputs.registry import check_input, open_input
 from controller.inputs.scripted import load_scenario
 from controller.reports import write_report
 from controller.runtime.backend import Backend
+from controller.runtime.estimation import attach_estimator
 from controller.runtime.loop import RateLoop, RealtimeSimulationClock, SimulationClock
 from controller.runtime.plots import plot_tracking
 from controller.runtime.run_config import SimRunConfig
@@ -174,7 +175,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
         reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits)
     elif follower is not None:
         reference = WaypointReference(follower)
-    session = Session(backend, tracker, source, reference)
+    estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)
+    session = Session(backend, tracker, source, reference, estimated)
     ghost = None
     if viewer is not None and reference is not None:
         from sim.render import Ghost  # noqa: PLC0415

@@ -61,4 +61,6 @@ def format_status(session: Session) -> str:
         parts.append(f"plan p50 {latency['p50']:.1f} ms")
     if supervisor.damp_reason:
         parts.append(supervisor.damp_reason)
+    elif supervisor.hold_reason:
+        parts.append(supervisor.hold_reason)
     return " | ".join(parts)

@@ -33,3 +33,17 @@ def test_policy_fault_damps_and_cannot_be_rearmed_while_present() -> None:
     sup = Supervisor()
     sup.update(CommandSample(WALK, Buttons(start=True)), "non-finite actions")
     assert sup.mode is Mode.DAMP and sup.damp_reason.startswith("fault")
+
+
+def test_hold_stands_for_good_and_keeps_its_first_cause() -> None:
+    sup = Supervisor()
+    sup.hold("state estimate lost (feet slipping)")
+    assert sup.mode is Mode.STAND
+    assert sup.update(CommandSample(WALK, Buttons(start=True)), None).is_zero()  # start does not resume a held run
+    assert sup.mode is Mode.STAND
+    sup.hold("another cause")
+    assert sup.hold_reason == "state estimate lost (feet slipping)"
+    sup.update(CommandSample(WALK, Buttons(estop=True)), None)
+    assert sup.mode is Mode.DAMP  # the e-stop still wins
+    sup.hold("later")
+    assert sup.mode is Mode.DAMP  # holding never lifts damping

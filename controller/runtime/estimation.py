@@ -1,0 +1,153 @@
+"""The state estimator in a run: the robot as the controller sees it, and the estimate judged by the truth.
+
+`EstimatedRobot` puts a `StateEstimator` between a backend's robot and the controller: every
+read is one estimator update (the tracker's rate), so the session, the references and the
+tracker see the estimated base position, velocity and heading, and nothing else changes
+(the backend keeps its robot, and closes it). `attach_estimator` decides where one runs.
+`EstimateJudge` compares the estimate with the simulator's truth tick by tick where a
+simulator stands behind the robot; the metrics of the run keep using the truth.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from controller.estimation.estimator import StateEstimator
+from controller.reports import percentiles_ms
+from controller.runtime.backend import Backend
+from hw.errors import ConfigError
+from hw import quat
+from hw.robot import RobotInterface
+from hw.types import JointCommand, RobotState
+
+if TYPE_CHECKING:
+    from controller.reference.waypoints import WaypointError
+
+
+def attach_estimator(backend: Backend, wanted: bool, config: str | None = None, assets_dir: str | None = None) -> EstimatedRobot | None:
+    """The controller's view through a state estimator wherever the robot measures no base position (every robot
+    but the simulator), or where `wanted` (`--estimator`: on the simulator too, to judge it against the truth)."""
+    if not wanted and backend.measures_base_position:
+        if config is not None:
+            raise ConfigError("--estimator-config: the simulator measures the base position itself; add --estimator to estimate it")
+        return None
+    robot = backend.robot
+    return EstimatedRobot(robot, StateEstimator.for_g1(robot.joint_names, config_path=config, assets_dir=assets_dir))
+
+
+class EstimatedRobot:
+    """`robot` as the controller sees it: read through `estimator`; commands go straight through."""
+
+    def __init__(self, robot: RobotInterface, estimator: StateEstimator) -> None:
+        self.robot, self.estimator = robot, estimator
+        self.first_time: float | None = None
+        self.last_time: float | None = None
+
+    def read(self) -> RobotState:
+        estimate = self.estimator.update(self.robot.read())
+        if self.first_time is None:
+            self.first_time = estimate.time
+        self.last_time = estimate.time
+        return estimate
+
+    def reset(self) -> None:
+        """The robot was put back at the start (the simulator after a fall): estimate afresh."""
+        self.estimator.reset()
+
+    def write(self, command: JointCommand) -> None:
+        self.robot.write(command)
+
+    def report(self) -> dict[str, Any]:
+        """Always: how often and at what cost it ran, and whether it gave up (the cause)."""
+        updates = len(self.estimator.update_seconds)
+        span = (self.last_time or 0.0) - (self.first_time or 0.0)
+        return {
+            "rate_hz": round((updates - 1) / span, 2) if updates > 1 and span > 0 else None,
+            "updates": updates,
+            "update_ms": percentiles_ms(self.estimator.update_seconds),
+            "fault": self.estimator.fault,
+        }
+
+
+class EstimateJudge:
+    """The estimate against the simulator's truth, one sample per control tick.
+
+    The estimate starts where the robot stood, facing the IMU's heading then; the truth is
+    read in that frame (aligned at the first sample), so a drift is what the estimate lost
+    along the way, not where the run began.
+    """
+
+    def __init__(self) -> None:
+        self._origin: tuple[np.ndarray, np.ndarray, float, float] | None = None  # truth xy, estimate xy, truth yaw, estimate yaw
+        self._last_truth_xy: np.ndarray | None = None
+        self.distance_m = 0.0
+        self.first_time = self.last_time = 0.0
+        self._velocity_sq: list[float] = []
+        self._final: tuple[float, float] = (0.0, 0.0)  # planar drift (m), heading drift (rad) at the last sample
+        self.contact_decisions = 0
+        self.contact_disagreements = 0
+        self._times: list[float] = []  # the controller's time of each sample ...
+        self._truth_poses: list[tuple[float, float, float]] = []  # ... and the truth's pose then: x, y (m), heading (rad)
+
+    def record(self, estimate: RobotState, truth: RobotState, estimated_contacts: tuple[bool, bool], true_contacts: tuple[bool, bool] | None) -> None:
+        truth_xy, estimate_xy = truth.base_pos[:2].copy(), estimate.base_pos[:2].copy()
+        truth_yaw, estimate_yaw = float(quat.heading(truth.base_quat)), float(quat.heading(estimate.base_quat))
+        if self._origin is None:
+            self._origin = (truth_xy, estimate_xy, truth_yaw, estimate_yaw)
+            self.first_time = estimate.time
+        else:
+            assert self._last_truth_xy is not None
+            self.distance_m += float(np.hypot(*(truth_xy - self._last_truth_xy)))
+        self._last_truth_xy = truth_xy
+        self.last_time = estimate.time
+        self._times.append(estimate.time)
+        self._truth_poses.append((float(truth_xy[0]), float(truth_xy[1]), truth_yaw))
+        truth0, estimate0, truth_yaw0, estimate_yaw0 = self._origin
+        turn = estimate_yaw0 - truth_yaw0  # truth frame -> estimate frame
+        in_estimate = estimate0 + _rotate(truth_xy - truth0, turn)
+        velocity = _rotate(truth.base_lin_vel[:2], turn)
+        self._velocity_sq.append(float(np.sum((estimate.base_lin_vel[:2] - velocity) ** 2)))
+        heading = float(quat.wrap_angle((estimate_yaw - estimate_yaw0) - (truth_yaw - truth_yaw0)))
+        self._final = (float(np.hypot(*(estimate_xy - in_estimate))), heading)
+        if true_contacts is not None:
+            self.contact_decisions += 2
+            self.contact_disagreements += sum(e != t for e, t in zip(estimated_contacts, true_contacts, strict=True))
+
+    def report(self) -> dict[str, Any]:
+        """The issue's figures; None where nothing was recorded."""
+        if self._origin is None:
+            return {}
+        minutes = (self.last_time - self.first_time) / 60.0
+        drift, heading = self._final
+        return {
+            "judged_by": "truth",
+            "distance_m": round(self.distance_m, 3),
+            "position_drift_m": round(drift, 4),
+            "drift_per_distance": round(drift / self.distance_m, 5) if self.distance_m > 0.1 else None,
+            "heading_drift_deg_per_min": round(abs(math.degrees(heading)) / minutes, 3) if minutes > 0 else None,
+            "velocity_rmse_mps": round(math.sqrt(float(np.mean(self._velocity_sq))), 4),
+            "contact_decisions": self.contact_decisions,
+            "contact_disagreements": self.contact_disagreements,
+        }
+
+
+    def waypoint_errors(self, settled: Sequence[WaypointError]) -> list[dict[str, float]]:
+        """Each waypoint's error when the controller settled on it, as the truth had the robot then."""
+        errors = []
+        for e in settled:
+            i = min(bisect.bisect_left(self._times, e.time - 1e-9), len(self._times) - 1)
+            x, y, heading = self._truth_poses[i]
+            tx, ty, th = e.target
+            miss = abs(math.degrees(float(quat.wrap_angle(th - heading))))
+            errors.append({"position_m": round(math.hypot(tx - x, ty - y), 4), "heading_deg": round(miss, 3)})
+        return errors
+
+
+def _rotate(xy: np.ndarray, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]])
