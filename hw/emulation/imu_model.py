@@ -7,11 +7,12 @@ One model for both emulated IMUs (the serial IMU of simulated buses, the simulat
 - accelerometer = true specific force (gravity included) + bias + white noise (m/s^2, IMU frame);
 - attitude: what the IMU's own attitude filter outputs. Roll and pitch stay gravity-referenced
   (the true ones): the filter levels itself on the accelerometer's gravity. Heading has no such
-  reference (no magnetometer: the G1's `LowState_` carries none), so it is the gyro's integral and drifts by the
-  integrated gyro error about the vertical: a z bias b turns the heading by b rad/s on a level IMU.
+  reference (no magnetometer: the G1's `LowState_` carries none), so it is the gyro's integral
+  and drifts by the integrated gyro error about the vertical: a z bias b turns the heading by b
+  rad/s on a level IMU.
 
 The default noise is the Bosch BMI088's, a 6-axis MEMS IMU of the class in legged robots and
-their bench rigs (BMI088 data sheet BST-BMI088-DS001: gyroscope noise density 0.014 deg/s/sqrt(Hz),
+their bench rigs (Unitree does not name the G1's part; BMI088 data sheet BST-BMI088-DS001: gyroscope noise density 0.014 deg/s/sqrt(Hz),
 accelerometer 175 ug/sqrt(Hz)), times the square root of a 250 Hz noise bandwidth (the Nyquist
 band of the 500 Hz stream the host reads): 0.0039 rad/s and 0.027 m/s^2 per sample. Biases default
 to zero: a robot calibrates its IMU's turn-on bias out at start-up (at rest), and a heading target
