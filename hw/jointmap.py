@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from hw.dds.config import DdsHardwareConfig, dds_config_from, is_dds_config
+from hw.dds.config import DdsHardwareConfig, check_imu_model, dds_config_from, is_dds_config
+from hw.emulation.imu_model import ImuModelConfig
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
 from hw.joint_overrides import check_within_g1_limits, with_g1_joint_table
@@ -114,6 +115,7 @@ class HardwareConfig:
     description: str = ""
     simulated: bool = False  # true: emulators stand behind every bus (virtual CAN, sim://pty ports)
     imu: ImuConfig | None = None
+    imu_model: ImuModelConfig | None = None  # simulated only: the emulated IMU's noise and bias (None: the model's defaults)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
 
 
@@ -156,6 +158,7 @@ def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOIN
 
 
 def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:
+    check_imu_model(cfg.imu_model, cfg.simulated, source)
     missing = [j for j in expected_joints if j not in cfg.joints]
     if missing:
         raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
@@ -189,3 +192,5 @@ def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...],
             raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is not a serial bus of this config")
         if any(j.bus == cfg.imu.bus for j in cfg.joints.values()):
             raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is shared with motors; give the IMU its own port")
+    elif cfg.imu_model is not None:
+        raise ConfigError(f"{source}: imu_model: this config has no IMU to model (add an 'imu' section with its serial bus)")

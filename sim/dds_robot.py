@@ -17,6 +17,8 @@ publishes its ground truth on `sim/truth` (for a run's metrics, `sim.dds_truth`)
 physics per command, quiet in between but for a heartbeat state every 100 ms (the benchmark's
 round trip); `faults` make it develop the faults of `hw.emulation.g1_faults` mid-run; `remote` fills
 the `LowState_`'s `wireless_remote` (a scenario, the keyboard, a gamepad: `g1ctl robot --remote`).
+Its IMU measures as the `joint_map` config's `imu_model` states (`hw.emulation.imu_model`; the
+model's defaults without one), its noise seeded by `seed`.
 It stops after `duration_s` or on SIGTERM/SIGINT and reports what it counted.
 """
 
@@ -37,6 +39,7 @@ from hw.emulation.g1_lowlevel import LowLevelConfig
 from hw.g1 import CONTROL_CYCLE_HZ
 
 if TYPE_CHECKING:
+    from hw.dds.config import DdsHardwareConfig
     from hw.emulation.wire_audit import WireAudit
 
 LOCKSTEP_SILENCE = 50  # periods without a command before a lock-step robot publishes on its own
@@ -57,7 +60,8 @@ class DdsRobotConfig:
     faults: tuple[RobotFault, ...] = ()
     remote: Callable[[float], bytes] | None = None  # wireless_remote's 40 bytes by the time since the first command; None: zeros
     gantry: bool = False  # hang the pelvis in a virtual gantry (bring-up: a sweep cannot tip it over)
-    joint_map: str | None = None  # a DDS hardware config: every command taken is audited against its limits
+    joint_map: str | None = None  # a DDS hardware config: every command taken is audited against its limits, the IMU is its imu_model
+    seed: int = 0  # the IMU's noise (the run's seed, from the host that starts this robot)
 
 
 def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
@@ -80,17 +84,23 @@ def run_dds_robot(cfg: DdsRobotConfig) -> dict[str, Any]:
             signal.signal(s, handler)
 
 
-def _audit(joint_map: str) -> WireAudit:
-    """The audit of every command taken, against the joint limits of a DDS hardware config (times: simulated seconds)."""
-    from hw import g1  # noqa: PLC0415
+def _load_joint_map(joint_map: str) -> DdsHardwareConfig:
+    """The DDS hardware config the robot is started for (its joint limits, its IMU model)."""
     from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
-    from hw.emulation.wire_audit import WireAudit, WireLimits  # noqa: PLC0415
     from hw.errors import ConfigError  # noqa: PLC0415
     from hw.jointmap import load_robot_config  # noqa: PLC0415
 
     cfg = load_robot_config(joint_map)
     if not isinstance(cfg, DdsHardwareConfig):
         raise ConfigError(f"--joint-map {joint_map}: a simulated G1 over DDS needs a DDS hardware config (transport: dds)")
+    return cfg
+
+
+def _audit(cfg: DdsHardwareConfig) -> WireAudit:
+    """The audit of every command taken, against the joint limits of a DDS hardware config (times: simulated seconds)."""
+    from hw import g1  # noqa: PLC0415
+    from hw.emulation.wire_audit import WireAudit, WireLimits  # noqa: PLC0415
+
     return WireAudit(g1.JOINT_NAMES, WireLimits.of(g1.JOINT_NAMES, cfg.joints))
 
 
@@ -102,6 +112,7 @@ class _Server:
         from hw.dds.motion_switcher import MotionSwitcherService  # noqa: PLC0415
         from hw.dds.session import DdsSession  # noqa: PLC0415
         from hw.emulation.g1_lowlevel import G1LowLevel  # noqa: PLC0415
+        from hw.emulation.imu_model import ImuModel, ImuModelConfig  # noqa: PLC0415
         from sim.dds_truth import TRUTH_TOPIC, SimTruth_  # noqa: PLC0415
         from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415
         from sim.robot import SimRobot  # noqa: PLC0415
@@ -111,8 +122,10 @@ class _Server:
         self.robot = SimRobot(build_model(cfg.mjcf))
         self.session = DdsSession(cfg.dds)
         self.plant = MuJoCoPlant(self.robot, gantry_height=GANTRY_HEIGHT_M if cfg.gantry else None)
-        self.audit = _audit(cfg.joint_map) if cfg.joint_map is not None else None
-        self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel, self.audit)
+        hardware = _load_joint_map(cfg.joint_map) if cfg.joint_map is not None else None
+        self.audit = _audit(hardware) if hardware is not None else None
+        imu = ImuModel(hardware.imu_model if hardware is not None and hardware.imu_model is not None else ImuModelConfig(), cfg.seed)
+        self.lowlevel = G1LowLevel(self.plant, cfg.lowlevel, self.audit, imu)
         self.commands = self.session.reader(cfg.dds.lowcmd_topic, messages.LowCmd_)
         self.states = self.session.writer(cfg.dds.lowstate_topic, messages.LowState_)
         self.command_arrived = self.session.wait_set(self.commands)
@@ -182,7 +195,7 @@ class _Server:
     def _sample(self) -> bytes | None:
         """The `LowState_` to publish now as CDR (None: a stale robot publishes nothing); truth on its own period."""
         from hw.dds import cdr  # noqa: PLC0415
-        from hw.emulation.g1_faults import tamper  # noqa: PLC0415
+        from hw.emulation.g1_faults import imu_fault, tamper  # noqa: PLC0415
 
         self.ticks += 1
         if self.truth is not None and self.ticks % TRUTH_EVERY == 0:
@@ -193,7 +206,8 @@ class _Server:
             return None
         uptime = time.monotonic() - self.boot
         remote = bytes(40) if self.cfg.remote is None else self.cfg.remote(self._since_first_command())
-        return cdr.low_state_to_cdr(tamper(self.lowlevel.low_state(remote=remote, uptime_s=uptime), kinds))
+        state = self.lowlevel.low_state(remote=remote, uptime_s=uptime, imu_fault=imu_fault(kinds))
+        return cdr.low_state_to_cdr(tamper(state, kinds))
 
     def _since_first_command(self) -> float:
         """The remote's time line, like the faults': it starts with the host's first command taken (0 until then)."""

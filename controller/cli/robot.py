@@ -1,6 +1,6 @@
 """`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5] [--motion-mode ai]
-[--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad]`: a simulated G1 in its own
-process on the robot's DDS topics."""
+[--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad] [--joint-map CONFIG]
+[--seed N]`: a simulated G1 in its own process on the robot's DDS topics."""
 
 from __future__ import annotations
 
@@ -31,8 +31,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )  # fmt: skip
     robot.add_argument(
         "--joint-map", default=None, metavar="CONFIG",
-        help="a DDS hardware config whose joint limits judge every command taken (its report's 'wire' section)",
+        help="a DDS hardware config whose joint limits judge every command taken (its report's 'wire' section) "
+        "and whose imu_model the IMU measures with (default: the model's defaults)",
     )  # fmt: skip
+    robot.add_argument("--seed", type=int, default=0, help="seed of the IMU's noise (a run passes its own)")
     robot.add_argument(
         "--remote", default=None, metavar="SCENARIO",
         help="feed LowState_.wireless_remote from a scenario (name or .yaml; its time starts with the first command taken), "
@@ -52,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, dds=DdsConfig(domain=args.domain, interface=args.interface),
         lowlevel=LowLevelConfig(mode_machine=args.mode_machine), duration_s=args.duration, motion_mode=args.motion_mode,
         truth=args.truth, lockstep=args.lockstep, gantry=args.gantry, faults=tuple(RobotFault.parse(f) for f in args.fault),
-        joint_map=args.joint_map,
+        joint_map=args.joint_map, seed=args.seed,
     )  # fmt: skip
     with ExitStack() as stack:
         cfg = dataclasses.replace(cfg, remote=_remote(args.remote, stack))

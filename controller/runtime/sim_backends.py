@@ -98,15 +98,17 @@ class SimulatedHardwareBackend(HardwareBackend):
         duration: float = 0.0, seed: int = 0,
     ) -> None:  # fmt: skip
         """`faults`: a fault plan (name or path) the emulators and the controller's commands act out.
-        `perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them."""
+        `perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them.
+        `seed`: the run's, for the pushes and the IMU's noise."""
         cfg = load_hardware_config(hardware)
         plan = load_fault_file(faults) if faults else None
-        plans = load_faults(plan, faults, list(cfg.buses)) if plan is not None and faults is not None else None
+        imu_bus = cfg.imu.bus if cfg.imu is not None else None
+        plans = load_faults(plan, faults, list(cfg.buses), imu_bus) if plan is not None and faults is not None else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
         cfg = dataclasses.replace(cfg, safety=safety)
         self.sim = truth
         plant = MuJoCoPlant(truth)
-        self.twin = SimulatedHardware(cfg, plant, plans)
+        self.twin = SimulatedHardware(cfg, plant, plans, seed)
         try:
             host = HardwareRobot(self.twin.host_config, stamp_clock=plant.time, await_replies=self.twin.await_replies)
         except Exception:

@@ -122,7 +122,8 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
     if hw is not None:
         report["hw"] = hw
         if cfg.faults is not None:
-            report["drill"] = judge_drill(load_fault_file(cfg.faults), cfg.faults, hw, report["falls"] > 0, report["damp_reason"])
+            plan = load_fault_file(cfg.faults)
+            report["drill"] = judge_drill(plan, cfg.faults, hw, report["falls"] > 0, report["damp_reason"], report)
     _write_outputs(cfg, built.session, report)
     if outcome.error is not None:
         where = f"; report: {cfg.report}" if cfg.report else ""
@@ -207,8 +208,9 @@ def _backend(cfg: SimRunConfig, robot: SimRobot, duration: float | None) -> Back
         remote = ("--remote", cfg.scenario) if cfg.input == "unitree-remote" else ()  # the robot's remote plays the scenario
         faults = load_fault_file(cfg.faults).robot if cfg.faults is not None else ()
         drills = tuple(arg for fault in faults for arg in ("--fault", fault))
-        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir, (*remote, *drills, "--joint-map", cfg.hardware))
-    return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults)
+        robot_args = (*remote, *drills, "--joint-map", cfg.hardware, "--seed", str(cfg.seed))
+        return SimulatedDdsBackend(robot, hardware, cfg.hardware, cfg.assets_dir, robot_args)
+    return SimulatedHardwareBackend(robot, cfg.hardware, cfg.faults, seed=cfg.seed)
 
 
 def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:

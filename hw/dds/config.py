@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from hw.dds.session import DdsConfig
+from hw.emulation.imu_model import ImuModelConfig
 from hw.errors import ConfigError
 from hw.g1 import DAMPING_KD, JOINT_NAMES
 from hw.joint_overrides import check_within_g1_limits, with_g1_joint_table
@@ -59,6 +60,7 @@ class DdsHardwareConfig:
     mode_pr: int = 0  # 0: the ankles and waist in pitch/roll mode
     connect_timeout: float = 2.0  # s to wait for the robot's first LowState_
     release_motion_service: bool = True  # ask the robot's high-level motion service to let go before low-level control
+    imu_model: ImuModelConfig | None = None  # simulated only: the simulated G1's IMU noise and bias (None: the model's defaults)
     safety: DdsSafetyConfig = field(default_factory=DdsSafetyConfig)
 
 
@@ -79,4 +81,14 @@ def dds_config_from(data: Any, source: str, expected_joints: tuple[str, ...] = J
         raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
     cfg = from_dict(DdsHardwareConfig, data, source)
     check_within_g1_limits(cfg.joints, source)
+    check_imu_model(cfg.imu_model, cfg.simulated, source)
     return cfg
+
+
+def check_imu_model(model: ImuModelConfig | None, simulated: bool, source: str) -> None:
+    """An IMU error model belongs to a simulated robot: a real IMU brings its own noise (both config kinds check it alike)."""
+    if model is not None and not simulated:
+        raise ConfigError(
+            f"{source}: imu_model: only a simulated robot's IMU is modelled ('simulated: true'); a real robot's IMU measures "
+            "with its own noise: remove the block"
+        )

@@ -1,27 +1,44 @@
 """Judge a fault drill: did the stack do what the plan expects, on what reached the motors?
 
 Pure: it reads the run's hardware report (`wire`: the audit of the decoded frames; the
-safety layer's faults and clamped values) and whether the robot fell.
+safety layer's faults and clamped values), whether the robot fell, and the run's whole report.
+A drill's criteria are the functions of `CRITERIA`, each given the plan and the judged run and
+returning its failure lines: a criterion on another block of the report (say, whether the
+state estimator named a fault, for the IMU-bias drills) is one more function there, and one
+more field of `DrillExpectation` when a plan states what it expects.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from hw.emulation.faults import FaultFile
 
 
-def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool, damp_reason: str = "") -> dict[str, Any]:
+@dataclass(frozen=True)
+class JudgedRun:
+    """What a drill is judged on; a criterion writes its figures into `verdict`."""
+
+    hw: Mapping[str, Any]  # the backend's report: `wire`, `fault_reasons`, `clamped_values`
+    wire: Mapping[str, Any]
+    fell: bool
+    faults: list[str]  # the latched faults (or the fault the bring-up failed on)
+    report: Mapping[str, Any]  # the run's whole report
+    verdict: dict[str, Any]
+
+
+def judge_drill(
+    plan: FaultFile, source: str, hw: dict[str, Any], fell: bool, damp_reason: str = "", report: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
     """The drill's verdict: `passed`, and one line per way it failed. `damp_reason`: why the run damped, if it did
-    (a fault at bring-up is named there, not among the latched faults of a robot that never came up)."""
+    (a fault at bring-up is named there, not among the latched faults of a robot that never came up).
+    `report`: the run's whole report, for criteria on its other blocks."""
     expect, start = plan.expect, plan.start_s
     wire = hw.get("wire") or {}
-    reasons: list[str] = []
     verdict: dict[str, Any] = {"plan": source, "expected": expect.outcome, "fault_at_s": start, "within_s": expect.within_s}
-    if not wire:
-        reasons.append("no audit of the frames the motors decoded")
-    elif wire["outside_limits"]:
-        reasons.append(f"{wire['outside_limits']} commands outside the joint limits reached the motors")
+    reasons = _wire_reasons(wire)
     verdict["outside_limits"] = wire.get("outside_limits")
     faults = [str(f) for f in hw.get("fault_reasons") or []]
     if not faults and damp_reason.startswith("fault: "):
@@ -30,11 +47,33 @@ def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool, da
     if start is not None and until is not None and until < start:
         verdict |= {"faults": faults, "passed": False}
         return verdict | {"failures": [f"the run ended at {until:.2f} s, before the fault struck at {start:.2f} s: run it longer"]}
+    run = JudgedRun(hw, wire, fell, faults, report or {}, verdict)
+    for criterion in CRITERIA:
+        reasons += criterion(plan, run)
+    verdict["faults"] = faults
+    verdict["passed"] = not reasons
+    verdict["failures"] = reasons
+    return verdict
+
+
+def _wire_reasons(wire: Mapping[str, Any]) -> list[str]:
+    """No suite may waive this: a command outside the joint limits on the wire."""
+    if not wire:
+        return ["no audit of the frames the motors decoded"]
+    if wire["outside_limits"]:
+        return [f"{wire['outside_limits']} commands outside the joint limits reached the motors"]
+    return []
+
+
+def outcome_reasons(plan: FaultFile, run: JudgedRun) -> list[str]:
+    """The plan's `expect.outcome`: every motor damped in time, a ride-through, or values clamped."""
+    expect, start, wire, faults = plan.expect, plan.start_s, run.wire, run.faults
+    reasons: list[str] = []
     if expect.outcome == "damping":
         safe_since = wire.get("safe_since")
         latency = None if safe_since is None or start is None else round(safe_since - start, 4)
-        verdict["damping_latency_s"] = latency
-        verdict["limp_joints"] = wire.get("limp_joints", [])
+        run.verdict["damping_latency_s"] = latency
+        run.verdict["limp_joints"] = wire.get("limp_joints", [])
         if latency is None:
             reasons.append("not every motor ended damped or limp" if start is not None else "the plan has no fault to drill")
         elif latency < 0:
@@ -46,11 +85,13 @@ def judge_drill(plan: FaultFile, source: str, hw: dict[str, Any], fell: bool, da
     elif expect.outcome == "ride-through":
         if faults:
             reasons.append(f"a fault latched: {faults[0]}")
-        if fell:
+        if run.fell:
             reasons.append("the robot fell")
-    elif not hw.get("clamped_values"):
+    elif not run.hw.get("clamped_values"):
         reasons.append("the safety layer clamped nothing")
-    verdict["faults"] = faults
-    verdict["passed"] = not reasons
-    verdict["failures"] = reasons
-    return verdict
+    return reasons
+
+
+Criterion = Callable[[FaultFile, JudgedRun], list[str]]
+# Judged in this order after the wire check; add a criterion here (e.g. the estimator's fault line, read from `run.report`).
+CRITERIA: tuple[Criterion, ...] = (outcome_reasons,)

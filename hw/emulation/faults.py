@@ -8,11 +8,13 @@ stated time, ride through, or clamp. The run's report says whether it did (`hw.d
 
 from __future__ import annotations
 
+import math
 import random
 from dataclasses import dataclass, field, fields, replace
 from typing import Literal
 
 from hw.emulation.g1_faults import RobotFault
+from hw.emulation.imu_model import ZERO, ImuBias, Vec3
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import load_config, preset_names, resolve_preset
@@ -28,6 +30,8 @@ class FaultPlan:
     stuck: set[int] = field(default_factory=set)  # motor ids whose output is seized
     bus_off: bool = False  # the bus goes silent after one error frame
     silent: bool = False  # IMU: stop sending frames
+    gyro_bias: Vec3 = ZERO  # IMU: rad/s added to every gyro sample (and so to the heading's drift)
+    accel_bias: Vec3 = ZERO  # IMU: m/s^2 added to every accelerometer sample
     seed: int = 0
     start_s: float = 0.0  # simulated time from which `pending` is in force
     pending: FaultSpec | None = None  # faults held back until `update` reaches start_s
@@ -45,6 +49,10 @@ class FaultPlan:
             for f in fields(self):
                 if f.init and f.name not in ("seed", "start_s", "pending"):
                     setattr(self, f.name, getattr(live, f.name))
+
+    @property
+    def imu_bias(self) -> ImuBias:
+        return ImuBias(self.gyro_bias, self.accel_bias)
 
     def drop(self) -> bool:
         return self.drop_reply_prob > 0 and self.rng.random() < self.drop_reply_prob
@@ -70,6 +78,8 @@ class FaultSpec:
     stuck: tuple[int, ...] = ()
     bus_off: bool = False
     silent: bool = False
+    gyro_bias: Vec3 = ZERO  # the IMU's bus only: rad/s, IMU frame
+    accel_bias: Vec3 = ZERO  # the IMU's bus only: m/s^2, IMU frame
     seed: int = 0
     start_s: float = 0.0  # simulated seconds from the start of the run
 
@@ -79,6 +89,12 @@ class FaultSpec:
                 raise ValueError(f"{name} must be within [0, 1], got {getattr(self, name)}")
         if self.delay_reply_s < 0 or self.start_s < 0:
             raise ValueError("delay_reply_s and start_s must be >= 0")
+        if not all(math.isfinite(v) for v in (*self.gyro_bias, *self.accel_bias)):
+            raise ValueError(f"gyro_bias and accel_bias must be finite, got {list(self.gyro_bias)} and {list(self.accel_bias)}")
+
+    @property
+    def biases_imu(self) -> bool:
+        return self.gyro_bias != ZERO or self.accel_bias != ZERO
 
     @property
     def starts_fault(self) -> bool:
@@ -98,6 +114,8 @@ class FaultSpec:
             stuck=set(self.stuck),
             bus_off=self.bus_off,
             silent=self.silent,
+            gyro_bias=self.gyro_bias,
+            accel_bias=self.accel_bias,
             seed=self.seed,
         )
 
@@ -162,11 +180,15 @@ def load_fault_file(name_or_path: str) -> FaultFile:
     return load_config(FaultFile, resolve_preset(name_or_path, config_dir("faults"), "fault plan"))
 
 
-def load_faults(plan: FaultFile, source: str, bus_names: list[str]) -> dict[str, FaultPlan]:
-    """The live plan per bus; a bus the hardware config lacks is named in one line."""
+def load_faults(plan: FaultFile, source: str, bus_names: list[str], imu_bus: str | None = None) -> dict[str, FaultPlan]:
+    """The live plan per bus; a bus the hardware config lacks, or an IMU bias on a bus that is not the IMU's, is named in one line."""
     unknown = [b for b in plan.buses if b not in bus_names]
     if unknown:
         raise ConfigError(f"{source}: buses {unknown} are not in the hardware config (buses: {', '.join(bus_names)})")
+    misplaced = [b for b, s in plan.buses.items() if s.biases_imu and b != imu_bus]
+    if misplaced:
+        where = f"the IMU is on bus '{imu_bus}'" if imu_bus else "this hardware config has no IMU"
+        raise ConfigError(f"{source}: buses.{misplaced[0]}: gyro_bias and accel_bias are faults of the IMU; {where}")
     return {bus: s.plan() for bus, s in plan.buses.items()}
 
 

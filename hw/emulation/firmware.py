@@ -23,6 +23,7 @@ import can
 from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
+from hw.emulation.imu_model import ImuModel
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
 from hw.protocols import imu as imu_frame
@@ -283,17 +284,21 @@ class Rs485PortEmulator(_Emulator):
 
 
 class ImuEmulator:
-    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal.
+    """Writes one IMU frame per `emit()` to the far end of a pseudo-terminal: the plant's reading as `model` measures it
+    (None: as it is), with the bias of a fault plan's `gyro_bias`/`accel_bias` once in force.
 
     `reader_fd` (the host's end): `emit()` returns once a frame's bytes can be read there. A pseudo-terminal hands
     written bytes over from a kernel worker, which a loaded machine can hold back for tens of milliseconds: on the
     simulated clock, which does not wait, that would read as an IMU gone stale; on a UART the frame is on the wire.
     """
 
-    def __init__(self, fd: int, plant: Plant, faults: FaultPlan | None = None, reader_fd: int | None = None) -> None:
+    def __init__(
+        self, fd: int, plant: Plant, faults: FaultPlan | None = None, reader_fd: int | None = None, model: ImuModel | None = None
+    ) -> None:
         self.fd = fd
         self.plant = plant
         self.faults = faults or FaultPlan()
+        self.model = model
         self.reader_fd = reader_fd
         self.sequence = 0
         self.overflows = 0
@@ -303,7 +308,10 @@ class ImuEmulator:
         if self.faults.silent:
             return
         with self.plant.lock:
-            quat, gyro, acc = self.plant.imu_reading()
+            reading, now = self.plant.imu_reading(), self.plant.time()
+        if self.model is not None:
+            reading = self.model.measure(reading, now, self.faults.imu_bias)
+        quat, gyro, acc = reading
         sample = imu_frame.ImuSample(self.sequence, quat, gyro, acc)  # type: ignore[arg-type]
         self.sequence = (self.sequence + 1) & 0xFFFF
         try:

@@ -5,8 +5,10 @@ cable out, main board hung), `bad-crc` (every state corrupted on the wire), `mot
 motor reports error bits in `motorstate`), `hot` (a motor past its temperature limit),
 `nan` (a joint reads NaN: a broken encoder or firmware), `mode-machine` (the robot reports
 another type code and refuses commands stamped with the old one), `exit` (the robot process
-dies). Given as `KIND@SECONDS`, counted from the first
-command the robot takes. Pure functions on `LowState_` records; the process applies them.
+dies), `imu-bias` (the IMU's gyro and accelerometer read off by `IMU_BIAS_DRILL`: a bias the
+start-up calibration missed, or one a temperature change brought). Given as `KIND@SECONDS`,
+counted from the first command the robot takes. Pure functions on `LowState_` records; the
+process applies them (`imu-bias` through the IMU's error model, `imu_fault`).
 """
 
 from __future__ import annotations
@@ -15,13 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hw.emulation.imu_model import NO_FAULT, ImuBias
 from hw.errors import ConfigError
 from hw.protocols import unitree_hg as hg
 
-KINDS = ("stale", "bad-crc", "motor-error", "hot", "nan", "mode-machine", "exit")
+KINDS = ("stale", "bad-crc", "motor-error", "hot", "nan", "mode-machine", "exit", "imu-bias")
 FAULTY_MOTOR = 3  # left_knee_joint: the drills' motor
 MOTOR_ERROR_BITS = 0x0000_0020  # any non-zero motorstate is an error to the host
 HOT_C = 95
+# About half the zero-rate offset (+-1 deg/s) and the zero-g offset (+-20 mg) a BMI088-class IMU's data sheet allows
+# before calibration: 0.29, -0.29, 0.57 deg/s (34 deg/min of heading) and 20-31 mg. configs/faults/imu-bias.yaml states the same.
+IMU_BIAS_DRILL = ImuBias(gyro=(0.005, -0.005, 0.01), accel=(0.2, -0.2, 0.3))
 
 
 @dataclass(frozen=True)
@@ -47,6 +53,11 @@ def active(faults: tuple[RobotFault, ...], since_first_command: float | None) ->
     if since_first_command is None:
         return frozenset()
     return frozenset(f.kind for f in faults if since_first_command >= f.at_s)
+
+
+def imu_fault(kinds: frozenset[str]) -> ImuBias:
+    """The bias the faults in force add to the IMU."""
+    return IMU_BIAS_DRILL if "imu-bias" in kinds else NO_FAULT
 
 
 def tamper(record: np.ndarray, kinds: frozenset[str]) -> np.ndarray:

@@ -9,8 +9,8 @@ simulated robot process puts this behind `rt/lowcmd` and `rt/lowstate`):
   on joint i; any other mode leaves that joint limp.
 - No valid command for `command_timeout_s` (the host died, the cable came out): limp until
   the next valid one.
-- `low_state()` samples the plant: joint positions, velocities and torques, the IMU, a
-  millisecond tick, temperatures, the remote's 40 bytes, the CRC.
+- `low_state()` samples the plant: joint positions, velocities and torques, the IMU (as its
+  error model measures it), a millisecond tick, temperatures, the remote's 40 bytes, the CRC.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hw import g1
+from hw.emulation.imu_model import NO_FAULT, ImuBias, ImuModel
 from hw.emulation.plant import Plant
 from hw.emulation.wire_audit import MotorState, WireAudit
 from hw.errors import ConfigError
@@ -53,11 +54,15 @@ class LowLevelCounters:
 class G1LowLevel:
     """One robot's low-level loop over a `Plant`; `receive` takes commands, `tick` applies them, `low_state` reports."""
 
-    def __init__(self, plant: Plant, cfg: LowLevelConfig = LowLevelConfig(), audit: WireAudit | None = None) -> None:
-        """`audit`: told every command taken and each joint's state per tick (what a drill is judged on)."""
+    def __init__(
+        self, plant: Plant, cfg: LowLevelConfig = LowLevelConfig(), audit: WireAudit | None = None, imu: ImuModel | None = None
+    ) -> None:
+        """`audit`: told every command taken and each joint's state per tick (what a drill is judged on).
+        `imu`: how the IMU measures the plant's reading (None: as it is)."""
         self.plant = plant
         self.cfg = cfg
         self.audit = audit
+        self.imu = imu
         self.counters = LowLevelCounters()
         self.limp_reason: str | None = "no command yet"
         self._command: np.ndarray | None = None  # the last valid LowCmd_ record
@@ -109,15 +114,17 @@ class G1LowLevel:
     def limp(self) -> bool:
         return self._command is None
 
-    def low_state(self, remote: bytes = bytes(40), uptime_s: float | None = None) -> np.ndarray:
-        """The `LowState_` the robot publishes now (CRC set); `tick` counts milliseconds of `uptime_s` (default: the plant's time)."""
+    def low_state(self, remote: bytes = bytes(40), uptime_s: float | None = None, imu_fault: ImuBias = NO_FAULT) -> np.ndarray:
+        """The `LowState_` the robot publishes now (CRC set); `tick` counts milliseconds of `uptime_s` (default: the plant's time).
+        `imu_fault`: the bias a fault adds to the IMU now."""
         record = np.zeros((), dtype=hg.LOW_STATE)
         record["mode_machine"] = self.mode_machine
         uptime = self.plant.time() - self._start if uptime_s is None else uptime_s
         record["tick"] = round(uptime * 1000.0) & 0xFFFFFFFF
         with self.plant.lock:
-            quaternion, gyro, accel = self.plant.imu_reading()
+            reading, now = self.plant.imu_reading(), self.plant.time()
             states = [self.plant.joint_state(joint) for joint in g1.JOINT_NAMES]
+        quaternion, gyro, accel = reading if self.imu is None else self.imu.measure(reading, now, imu_fault)
         imu = record["imu_state"]
         imu["quaternion"], imu["gyroscope"], imu["accelerometer"] = quaternion, gyro, accel
         imu["rpy"] = roll_pitch_yaw(quaternion)

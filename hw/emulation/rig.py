@@ -17,6 +17,7 @@ from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
 from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
+from hw.emulation.imu_model import ImuModel, ImuModelConfig
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
 from hw.emulation.wire_audit import WireAudit, WireLimits
@@ -28,9 +29,10 @@ ANSWER_TIMEOUT_S = 1.0  # bounds the wait for the CAN emulators' answers: only a
 
 
 class SimulatedHardware:
-    """Starts an emulator behind every bus of `cfg`; close() stops them. `audit` holds what the motors decoded."""
+    """Starts an emulator behind every bus of `cfg`; close() stops them. `audit` holds what the motors decoded.
+    The IMU measures as `cfg.imu_model` states (its defaults when the config has none), its noise seeded by `seed` (the run's)."""
 
-    def __init__(self, cfg: HardwareConfig, plant: Plant, faults: dict[str, FaultPlan] | None = None) -> None:
+    def __init__(self, cfg: HardwareConfig, plant: Plant, faults: dict[str, FaultPlan] | None = None, seed: int = 0) -> None:
         self.plant = plant
         self.faults = faults or {}
         names = tuple(cfg.joints)
@@ -61,7 +63,8 @@ class SimulatedHardware:
                     self._fds += [master, slave]
                     host_buses[name] = dataclasses.replace(bus, port=os.ttyname(slave))
                     if cfg.imu is not None and cfg.imu.bus == name:
-                        self.imu = ImuEmulator(master, plant, plan, reader_fd=slave)
+                        model = ImuModel(cfg.imu_model or ImuModelConfig(), seed)
+                        self.imu = ImuEmulator(master, plant, plan, reader_fd=slave, model=model)
                     else:
                         rs_motors = {
                             jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio, audit=self.audit)

@@ -6,6 +6,7 @@ import json
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -17,6 +18,7 @@ from hw.dds import messages as m
 from hw.dds.link import DdsLink, RobotNotFoundError
 from hw.dds.motion_switcher import release_motion_service
 from hw.dds.session import DdsConfig, DdsSession
+from hw.emulation.g1_faults import IMU_BIAS_DRILL
 from hw.protocols import unitree_hg as hg
 from tests.conftest import HANG_S, wait_for
 
@@ -113,3 +115,47 @@ def test_the_host_link_connects_releases_the_motion_service_and_holds_a_joint(cl
     report = json.loads(out.strip().splitlines()[-1])
     assert report["commands"] > 100 and report["mode_machine_mismatches"] == 0 and report["crc_errors"] == 0
     assert report["commands_while_high_level"] >= 1 and report["motion_mode"] == "" and report["motion_release_requests"] == 1
+
+
+def test_the_simulated_robots_imu_is_noisy_about_gravity_and_takes_its_bias_fault(claim_dds_domain: Callable[[], int]) -> None:
+    """On the gantry (still): LowState_'s accelerometer reads +9.81 up with sim-dds's imu_model noise; 0.3 s after the first
+    command, the `imu-bias` fault's bias on the gyro and the accelerometer."""
+    domain = claim_dds_domain()
+    child = subprocess.Popen(
+        [sys.executable, "-m", "controller.cli", "robot", "--dds", "--domain", str(domain), "--duration", "8", "--motion-mode", "",
+         "--gantry", "--joint-map", "sim-dds", "--seed", "3", "--fault", "imu-bias@0.3"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    session = DdsSession(DdsConfig(domain=domain, interface="lo"))
+    try:
+        states = session.reader("rt/lowstate", m.LowState_)
+        commands = session.writer("rt/lowcmd", m.LowCmd_)
+        received: list[np.ndarray] = []
+
+        def take(count: int) -> np.ndarray:
+            """The IMU of `count` states to come (the newest at each look): gyroscope (columns 0-2) and accelerometer (3-5)."""
+            received.clear()
+
+            def taken() -> bool:
+                received.extend(m.low_state_to_record(s) for s in states.take(N=10) if isinstance(s, m.LowState_))
+                return len(received) >= count
+
+            assert wait_for(taken, timeout=3 * HANG_S), f"{len(received)} LowState_ in {3 * HANG_S} s"
+            return np.array([[*r["imu_state"]["gyroscope"], *r["imu_state"]["accelerometer"]] for r in received])
+
+        still = take(150)
+        assert still[:, 3:].mean(axis=0) == pytest.approx((0.0, 0.0, 9.81), abs=0.01)
+        assert still[:, 3:].std(axis=0) == pytest.approx(0.0271, rel=0.2) and still[:, :3].std(axis=0) == pytest.approx(0.00386, rel=0.2)
+        command = hg.new_low_cmd(mode_machine=5)
+        command["motor_cmd"]["mode"][:29], command["motor_cmd"]["kd"][:29] = 1, 1.0
+        commands.write(m.low_cmd_from_record(hg.with_crc(command)))  # the fault's clock starts with the first command taken
+        time.sleep(0.6)  # the bias strikes 0.3 s after the command, on the robot's wall clock
+        biased = take(150)
+        assert biased[:, :3].mean(axis=0) == pytest.approx(IMU_BIAS_DRILL.gyro, abs=0.002)
+        assert biased[:, 3:].mean(axis=0) == pytest.approx(np.add((0.0, 0.0, 9.81), IMU_BIAS_DRILL.accel), abs=0.01)
+    finally:
+        session.close()
+        child.send_signal(signal.SIGTERM)
+    out, err = child.communicate(timeout=20)
+    assert child.returncode == 0, err
+    assert json.loads(out.strip().splitlines()[-1])["faults"] == ["imu-bias"]

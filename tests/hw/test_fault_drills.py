@@ -10,6 +10,7 @@ import pytest
 
 from hw import g1
 from hw.dds.domains import claim_domain
+from hw.emulation import drill
 from hw.emulation.drill import judge_drill
 from hw.emulation.faults import FaultFile, FaultSpec, available_fault_plans, check_plan_fits, load_fault_file
 from hw.emulation.g1_lowlevel import G1LowLevel, LowLevelConfig
@@ -142,3 +143,20 @@ def test_simulated_dds_runs_claim_domains_of_their_own(tmp_path: Path) -> None:
     assert third.domain == 7
     second.release()
     third.release()
+
+
+def test_a_drill_criterion_joins_the_list_and_reads_the_runs_report(monkeypatch: pytest.MonkeyPatch) -> None:
+    """How a criterion on another block of the report (the estimator's fault line) joins the IMU-bias drill's judging."""
+
+    def estimator_quiet(plan: FaultFile, run: drill.JudgedRun) -> list[str]:
+        fault = run.report.get("estimator", {}).get("fault")
+        return [f"the estimator named a fault: {fault}"] if fault else []
+
+    plan = load_fault_file("imu-bias")
+    hw = {"wire": wire(None)}
+    assert judge_drill(plan, "p", hw, fell=False)["passed"]
+    assert judge_drill(plan, "p", hw, fell=True)["failures"] == ["the robot fell"]
+    monkeypatch.setattr(drill, "CRITERIA", (*drill.CRITERIA, estimator_quiet))
+    assert judge_drill(plan, "p", hw, fell=False, report={"estimator": {"fault": None}})["passed"]
+    verdict = judge_drill(plan, "p", hw, fell=True, report={"estimator": {"fault": "diverged"}})
+    assert verdict["failures"] == ["the robot fell", "the estimator named a fault: diverged"]
