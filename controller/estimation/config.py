@@ -41,7 +41,10 @@ class MeasurementNoise:
     """How far each leg-kinematic measurement is trusted (standard deviations)."""
 
     foot_position: float  # m: a foot's position relative to the base, from the joint encoders
-    foot_velocity: float  # m/s: the base velocity a stance foot implies, -R (J dq + w x r)
+    foot_velocity: float  # m/s: the base velocity a stance foot implies, -R (J dq + w x r), for the lower foot
+    # m: a stance foot's velocity noise grows as (1 + h / height_scale), h its height above the lower foot: a foot
+    # that rolls onto its toe or heel (lifting, landing) moves at its sole point while it still touches the floor.
+    height_scale: float
 
     def __post_init__(self) -> None:
         _check_positive(self)
@@ -63,7 +66,8 @@ class FaultConfig:
     """When the estimate can no longer be trusted: the fault latches until `reset()`."""
 
     max_position_std: float  # m: the base position's standard deviation beyond which the filter has diverged
-    slip_speed: float  # m/s: stance feet sliding apart, or a stance foot's velocity against the IMU's, filtered
+    slip_speed: float  # m/s: flat feet sliding apart, or the lower foot's velocity against the IMU's, filtered
+    flat_height: float  # m: a foot this close above the lower one is flat on the ground, for the slip watch
     slip_time_constant: float  # s: the low-pass filter on both slip measures (touchdown transients pass through it)
     max_gap: float  # s: the longest time between two updates
 

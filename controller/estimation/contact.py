@@ -10,7 +10,6 @@ a contact decision from the joint torques.
 from __future__ import annotations
 
 from controller.estimation.config import ContactConfig
-from hw.types import FloatArray
 
 
 class ContactDetector:
@@ -21,9 +20,8 @@ class ContactDetector:
     def reset(self) -> None:
         self.contacts = (True, True)
 
-    def decide(self, heights: FloatArray) -> tuple[bool, bool]:
-        """`heights`: the two feet's contact points along gravity (m, up), relative to the base."""
-        left, right = float(heights[0]), float(heights[1])
+    def decide(self, left: float, right: float) -> tuple[bool, bool]:
+        """`left`, `right`: the feet's contact points along gravity (m, up), relative to the base."""
         lowest = min(left, right)
         margin, extra = self.config.height_margin, self.config.hysteresis
         self.contacts = (

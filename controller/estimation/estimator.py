@@ -31,7 +31,6 @@ from hw.types import FloatArray, RobotState
 POS, VEL, LEFT, RIGHT = 0, 1, 2, 3
 # Measurements: left foot - base, right foot - base, base velocity from the left foot, from the right foot.
 _H = np.array([[-1.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
-GAP_SCALE = 1e9
 _SWING_VELOCITY_VARIANCE = 1e6  # (m/s)^2: a foot in the air says nothing about the base's velocity
 
 
@@ -60,6 +59,7 @@ class StateEstimator:
             self._r[pair] = np.diag([meas.foot_position**2, meas.foot_position**2, *velocity])
         self._f = np.eye(4)
         self._b = np.zeros((4, 1))
+        self._measured = np.zeros((4, 3))  # the measurement: each foot relative to the base, the base velocity each implies
         self.update_seconds: list[float] = []
         self.reset()
 
@@ -114,20 +114,20 @@ class StateEstimator:
                 )
             self._fault = "the IMU's accelerometer reading (imu_accel) went missing"
             return
-        bad = _first_nonfinite(state)
-        if bad is not None:
-            self._fault = f"non-finite input: {bad}"
-            return
-        dt = 0.0 if self._time is None else state.time - self._time
+        dt = 0.0 if first else state.time - self._time  # type: ignore[operator]
         if dt > self.config.fault.max_gap:
             self._fault = f"no update for {dt:.3f} s (more than {self.config.fault.max_gap} s)"
             return
-        if not first and dt <= 0.0:
+        if not first and not dt > 0.0:
+            if not math.isfinite(dt):
+                self._fault = "non-finite input: time"
             return  # the same reading again: nothing new to fuse
-        self._time = state.time
 
         w, x, y, z = state.base_quat.tolist()
         norm = math.sqrt(w * w + x * x + y * y + z * z)
+        if not norm > 1e-6:
+            self._fault = "non-finite input: base_quat" if math.isnan(norm) else f"base_quat is no rotation (length {norm:.3g})"
+            return
         w, x, y, z = w / norm, x / norm, y / norm, z / norm
         rot = np.array(
             [
@@ -140,25 +140,31 @@ class StateEstimator:
         omega_t = np.array([[0.0, gz, -gy], [-gz, 0.0, gx], [gy, -gx, 0.0]])  # r @ omega_t = omega x r
         kin = self.kinematics
         kin.update(state.joint_pos[self._legs], state.joint_vel[self._legs])
-        feet = kin.foot_pos @ rot.T  # (2, 3): each contact point relative to the base, world axes
-        base_velocity = -(kin.foot_vel + kin.foot_pos @ omega_t) @ rot.T  # (2, 3): what each foot implies, if it stands
-        contacts = self._contact.decide(feet[:, 2])
-
+        measured = self._measured
+        feet, base_velocity = measured[:2], measured[2:]
+        np.matmul(kin.foot_pos, rot.T, out=feet)  # each contact point relative to the base, world axes
+        np.matmul(-(kin.foot_vel + kin.foot_pos @ omega_t), rot.T, out=base_velocity)  # what each foot implies, if it stands
+        accel = rot @ state.imu_accel + self._gravity
+        if not math.isfinite(float(measured.sum()) + float(accel.sum())):
+            self._fault = f"non-finite input: {_first_nonfinite(state, self._legs)}"
+            return
+        self._time = state.time
+        left, right = feet[:, 2].tolist()
+        contacts = self._contact.decide(left, right)
         if first:
             self._start(feet, base_velocity, contacts)
             return
         f, b = self._f, self._b
         f[POS, VEL] = dt
         b[POS, 0], b[VEL, 0] = 0.5 * dt * dt, dt
-        accel = rot @ state.imu_accel + self._gravity
         x_prior, p_prior = predict(self._x, self._p, f, self._q_rate[contacts] * dt, b * accel)
-        measured = np.concatenate((feet, base_velocity))
-        r = self._r[contacts].copy()
-        gaps = feet[:, 2] - feet[:, 2].min()
-        r[2, 2] *= (1.0 + gaps[0] / GAP_SCALE) ** 2
-        r[3, 3] *= (1.0 + gaps[1] / GAP_SCALE) ** 2
+        r = self._r[contacts].copy()  # the higher foot's velocity counts for less, the higher it is
+        lowest, scale = min(left, right), self.config.measurement.height_scale
+        gaps = (left - lowest, right - lowest)
+        r[2, 2] *= (1.0 + gaps[0] / scale) ** 2
+        r[3, 3] *= (1.0 + gaps[1] / scale) ** 2
         self._x, self._p, _ = update(x_prior, p_prior, _H, r, measured)
-        self._watch_slip(base_velocity, x_prior[VEL], contacts, dt)
+        self._watch_slip(base_velocity, x_prior[VEL], gaps, dt)
         if self._fault is None:
             self._watch_estimate()
 
@@ -171,26 +177,32 @@ class StateEstimator:
         meas = self.config.measurement
         self._p = np.diag([0.0, meas.foot_velocity**2, meas.foot_position**2, meas.foot_position**2])
 
-    def _watch_slip(self, base_velocity: FloatArray, velocity_prior: FloatArray, contacts: tuple[bool, bool], dt: float) -> None:
-        """Latch a slip when, low-pass filtered, the stance feet move apart, or a stance foot's velocity leaves the IMU's prediction."""
+    def _watch_slip(self, base_velocity: FloatArray, velocity_prior: FloatArray, gaps: tuple[float, float], dt: float) -> None:
+        """Latch a slip when, low-pass filtered, flat feet move apart or the lower foot's velocity leaves the IMU's prediction.
+
+        Only flat feet count (within `flat_height` of the lower one): a foot rolling onto its toe or heel moves at its sole point.
+        """
         cfg = self.config.fault
         alpha = dt / (cfg.slip_time_constant + dt)
-        apart = float(np.linalg.norm(base_velocity[0] - base_velocity[1])) if all(contacts) else 0.0
-        against = max((float(np.linalg.norm(base_velocity[i] - velocity_prior)) for i in (0, 1) if contacts[i]), default=0.0)
+        (lx, ly, lz), (rx, ry, rz) = (base_velocity - velocity_prior).tolist()  # each foot's velocity against the IMU's prediction
+        flat = cfg.flat_height
+        apart = math.sqrt((lx - rx) ** 2 + (ly - ry) ** 2 + (lz - rz) ** 2) if gaps[0] < flat and gaps[1] < flat else 0.0
+        against = math.sqrt(lx * lx + ly * ly + lz * lz) if gaps[0] == 0.0 else math.sqrt(rx * rx + ry * ry + rz * rz)
         self._slip_apart += alpha * (apart - self._slip_apart)
         self._slip_imu += alpha * (against - self._slip_imu)
         if self._slip_apart > cfg.slip_speed:
             self._fault = f"feet slipping: the stance feet move apart at {self._slip_apart:.2f} m/s (limit {cfg.slip_speed} m/s)"
         elif self._slip_imu > cfg.slip_speed:
             self._fault = (
-                f"feet slipping: a stance foot's velocity differs from the IMU's by {self._slip_imu:.2f} m/s (limit {cfg.slip_speed} m/s)"
+                f"feet slipping: the stance foot's velocity differs from the IMU's by {self._slip_imu:.2f} m/s (limit {cfg.slip_speed} m/s)"
             )
 
     def _watch_estimate(self) -> None:
         if not (np.isfinite(self._x).all() and np.isfinite(self._p).all()):
             self._fault = "the estimate became non-finite"
         elif self.position_std > self.config.fault.max_position_std:
-            self._fault = f"the estimate diverged: position standard deviation {self.position_std:.2f} m (limit {self.config.fault.max_position_std} m)"
+            limit = self.config.fault.max_position_std
+            self._fault = f"the estimate diverged: position standard deviation {self.position_std:.2f} m (limit {limit} m)"
 
     def _output(self, state: RobotState) -> RobotState:
         """The estimate while it is trusted; after a fault the last trusted one (the attitude stays the IMU's while it is finite)."""
@@ -202,9 +214,8 @@ class StateEstimator:
         return dataclasses.replace(state, base_pos=pos.copy(), base_lin_vel=vel.copy(), base_quat=attitude, has_base_position=True)
 
 
-def _first_nonfinite(state: RobotState) -> str | None:
+def _first_nonfinite(state: RobotState, legs: FloatArray) -> str:
     """The first field of `state` the estimator reads that holds a NaN or an infinity."""
-    for name in ("joint_pos", "joint_vel", "base_quat", "base_ang_vel", "imu_accel"):
-        if not math.isfinite(float(np.sum(getattr(state, name)))):
-            return name
-    return None
+    fields = {"joint_pos (legs)": state.joint_pos[legs], "joint_vel (legs)": state.joint_vel[legs], "base_quat": state.base_quat}
+    fields |= {"base_ang_vel": state.base_ang_vel, "imu_accel": state.imu_accel}
+    return next((name for name, values in fields.items() if not np.isfinite(values).all()), "the base attitude")

@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from hw.errors import AssetError
+from hw.g1 import ROOT_BODY
 from hw.types import FloatArray
 
-ROOT_BODY = "pelvis"
 SIDES = ("left", "right")
 # The six hinges of a leg, hip to ankle, by the name the MJCF gives them after the side's prefix.
 LEG_JOINTS = ("hip_pitch_joint", "hip_roll_joint", "hip_yaw_joint", "knee_joint", "ankle_pitch_joint", "ankle_roll_joint")
@@ -149,18 +149,20 @@ class LegKinematics:
         self.chains = chains
         self.joint_names: tuple[str, ...] = chains[0].joints + chains[1].joints
         self.contact_offset = np.asarray(contact_offset, dtype=np.float64)
-        self._body_pos = np.stack([c.body_pos for c in chains])[..., None]  # (2, 6, 3, 1)
-        self._body_rot = np.stack([c.body_rot for c in chains])  # (2, 6, 3, 3)
+        body_rot = np.stack([c.body_rot for c in chains])  # (2, 6, 3, 3)
         axis = np.stack([c.joint_axis for c in chains])  # (2, 6, 3)
-        self._axis_in_parent = self._body_rot @ axis[..., None]  # (2, 6, 3, 1): the hinge axis in the parent's frame
         skew = np.zeros((2, 6, 3, 3))
         skew[..., 0, 1], skew[..., 0, 2], skew[..., 1, 2] = -axis[..., 2], axis[..., 1], -axis[..., 0]
         skew -= np.swapaxes(skew, -1, -2)
-        # Each body's rotation in its parent at hinge angle q: Rb (I + sin q K + (1 - cos q) K^2) (Rodrigues).
-        self._rb_skew, self._rb_skew2 = self._body_rot @ skew, self._body_rot @ skew @ skew
-        self._frames = np.zeros((2, 7, 3, 3))  # cumulative rotations: pelvis, then after each hinge
+        # Each body's rotation in its parent at hinge angle q is Rb (I + sin q K + (1 - cos q) K^2) (Rodrigues):
+        # the row (1, sin q, 1 - cos q) times the three matrices, flattened, is one batched product.
+        self._basis = np.stack([body_rot, body_rot @ skew, body_rot @ skew @ skew], axis=2).reshape(2, 6, 3, 9)
+        self._coef = np.ones((2, 6, 1, 3))
+        self._local = np.zeros((2, 6, 1, 9))
+        self._body_pos = np.stack([c.body_pos for c in chains])[..., None]  # (2, 6, 3, 1)
+        self._axis_in_parent = body_rot @ axis[..., None]  # (2, 6, 3, 1): the hinge axis in the parent's frame
+        self._frames = np.zeros((2, 7, 3, 3))  # cumulative rotations: the pelvis, then each body after its hinge
         self._frames[:, 0] = np.eye(3)
-        self._local = np.zeros((2, 6, 3, 3))
         self.foot_pos = np.zeros((2, 3))
         self.foot_vel = np.zeros((2, 3))
         self.jac_pos = np.zeros((2, 3, 6))
@@ -172,21 +174,23 @@ class LegKinematics:
 
     def update(self, q: FloatArray, dq: FloatArray) -> None:
         """Forward kinematics and Jacobians of both legs at joint angles `q` (12), velocities from rates `dq` (12)."""
-        angles = q.reshape(2, 6, 1, 1)
-        local, frames = self._local, self._frames
-        np.multiply(np.sin(angles), self._rb_skew, out=local)
-        local += (1.0 - np.cos(angles)) * self._rb_skew2
-        local += self._body_rot
+        angles = q.reshape(2, 6)
+        coef, frames = self._coef, self._frames
+        np.sin(angles, out=coef[:, :, 0, 1])
+        np.cos(angles, out=coef[:, :, 0, 2])
+        np.subtract(1.0, coef[:, :, 0, 2], out=coef[:, :, 0, 2])
+        local = np.matmul(coef, self._basis, out=self._local).reshape(2, 6, 3, 3)
         for i in range(6):
             np.matmul(frames[:, i], local[:, i], out=frames[:, i + 1])
         before = frames[:, :6]  # each body's parent frame, in the pelvis frame
         hinges = np.cumsum(before @ self._body_pos, axis=1)[..., 0]  # (2, 6, 3): each hinge's position
         axes = (before @ self._axis_in_parent)[..., 0]  # (2, 6, 3): each hinge's axis
         foot = hinges[:, 5] + frames[:, 6] @ self.contact_offset
+        columns = _cross(axes, foot[:, None, :] - hinges)  # (2, 6, 3): each hinge's column of the position Jacobian
         self.foot_pos[:] = foot
         self.jac_rot[:] = np.swapaxes(axes, 1, 2)
-        self.jac_pos[:] = np.swapaxes(_cross(axes, foot[:, None, :] - hinges), 1, 2)
-        np.matmul(self.jac_pos, dq.reshape(2, 6, 1), out=self.foot_vel[..., None])
+        self.jac_pos[:] = np.swapaxes(columns, 1, 2)
+        np.matmul(dq.reshape(2, 1, 6), columns, out=self.foot_vel[:, None, :])
 
 
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
