@@ -14,6 +14,7 @@ from hw.robot import RobotInterface
 from hw.types import FloatArray, JointCommand, RobotState
 
 IMU_ACCELEROMETER = "base_accel"  # the G1 model's accelerometer at the pelvis IMU (site imu_in_pelvis, axes the pelvis's)
+FLOOR_GEOM = "floor"  # the scene's ground (`sim.world`): a plane, or a height field on uneven ground
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,15 @@ class SimRobot(RobotInterface):
         accel = model.sensor(IMU_ACCELEROMETER)
         self._accel_adr = slice(int(model.sensor_adr[accel.id]), int(model.sensor_adr[accel.id]) + 3)
         self._cos_max_tilt = float(np.cos(np.deg2rad(fall.max_tilt_deg)))
+        self._floor_id = model.geom(FLOOR_GEOM).id
+        self._foot_geoms = tuple(
+            frozenset(
+                g
+                for g in range(model.ngeom)
+                if model.geom_bodyid[g] == model.body(body).id and model.geom_contype[g] | model.geom_conaffinity[g]
+            )
+            for body in constants.ANKLE_BODIES
+        )
         self._gains: tuple[FloatArray | None, FloatArray | None] = (None, None)
         self.reset()
 
@@ -93,6 +103,18 @@ class SimRobot(RobotInterface):
     def imu_accel(self) -> FloatArray:
         """The pelvis IMU's accelerometer (specific force in its frame, gravity included), as of the last physics step."""
         return self.data.sensordata[self._accel_adr].copy()
+
+    def foot_contacts(self) -> tuple[bool, bool]:
+        """Left, right: whether any collision geom of the foot touches the floor, as of the last physics step."""
+        left = right = False
+        floor, (left_geoms, right_geoms) = self._floor_id, self._foot_geoms
+        contact = self.data.contact
+        for i in range(self.data.ncon):
+            g1, g2 = int(contact.geom1[i]), int(contact.geom2[i])
+            other = g2 if g1 == floor else g1 if g2 == floor else -1
+            left = left or other in left_geoms
+            right = right or other in right_geoms
+        return left, right
 
     def write(self, command: JointCommand) -> None:
         """Load the PD law into the actuators: force = kp q* + kd dq* + tau - kp q - kd dq."""

@@ -42,6 +42,7 @@ SIM_FREE_FOLDERS = (
     "controller/inputs",
     "controller/planner",
     "controller/text",
+    "controller/estimation",
 )
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
@@ -55,7 +56,7 @@ CONTROLLER_TOP_LEVEL = {"__init__", "assets", "reports", "onnx_session"}
 # from its own layer's other folders nor from above. The top-level modules are the ground floor.
 CONTROLLER_LAYERS: tuple[tuple[str, ...], ...] = (
     ("assets", "reports", "onnx_session"),  # controller/'s top-level modules
-    ("commands", "planner"),  # the command vocabulary; the planner contract and its runtime
+    ("commands", "planner", "estimation"),  # the command vocabulary; the planner contract and its runtime; the state estimator
     ("inputs", "motion_data", "reference"),  # command sources; the motion dataset; what a tracker follows
     ("tracking",),  # trackers: reference window in, joint command out
     ("runtime",),  # sessions, backends, whole sim and robot runs
