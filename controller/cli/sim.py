@@ -66,19 +66,13 @@ def run(args: argparse.Namespace) -> int:
     return run_and_summarize(cfg)
 
 
-def is_real_robot(hardware: str) -> bool:
-    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
-    from hw.jointmap import load_robot_config  # noqa: PLC0415
-
-    config = load_robot_config(hardware)
-    return isinstance(config, DdsHardwareConfig) and not config.simulated
-
-
 def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
     """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault.
 
     `on_robot`: a real robot's config (`simulated: false`) drives that robot (`g1ctl run`); otherwise it is refused.
     """
+    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+
     if cfg.hardware is not None and is_real_robot(cfg.hardware):
         if not on_robot:
             hardware = cfg.hardware

@@ -1,15 +1,21 @@
 """What a run is asked to do: `g1ctl sim` and `g1ctl run` parse into this; the simulator and the real robot both take it.
 
-Apart from `sim_run` so that a run on a real robot (`robot_run`) reads it without importing MuJoCo.
+Apart from `sim_run` so that a run on a real robot (`robot_run`) reads it without importing MuJoCo: the config,
+the hooks a job built on a run adds (the text planner), and whether a hardware config names a real robot.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from controller.commands.velocity import CommandLimits
+    from controller.reference.planned import PlannedReference
+    from controller.reference.source import ReferenceSource
+    from hw.types import RobotState
     from sim.perturbations import Perturbations
 
 
@@ -37,3 +43,27 @@ class SimRunConfig:
     perturbations: Perturbations | None = None  # pushes, friction, payload, motor strength, latency, noise (`sim.perturbations`)
     rt_priority: int = 0  # on a real robot: SCHED_FIFO priority of the run (0: normal scheduling), see hw.realtime
     cpu: int | None = None  # on a real robot: pin the run to this CPU
+
+
+@dataclass(frozen=True)
+class RunHooks:
+    """What a job built on a run adds (the text planner): its reference source over the planned one, a caption, an early end.
+
+    `wrap_reference(planned, limits, truth)` returns the source the session ticks; `truth()` is the
+    backend's ground truth at the tick (None: no simulator behind the robot). `caption()` is written
+    on each video frame and on the status line; `done()` ends the run before its duration. The
+    simulator (`sim_run`) and a real robot (`robot_run`) take the same hooks.
+    """
+
+    wrap_reference: Callable[[PlannedReference, CommandLimits, Callable[[], RobotState | None]], ReferenceSource]
+    caption: Callable[[], str] | None = None
+    done: Callable[[], bool] | None = None
+
+
+def is_real_robot(hardware: str) -> bool:
+    """`hardware` names a real G1 over DDS (`simulated: false`): it runs through `robot_run`, with no simulator."""
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
+
+    config = load_robot_config(hardware)
+    return isinstance(config, DdsHardwareConfig) and not config.simulated
