@@ -50,7 +50,8 @@ class RunHooks:
     """What a job built on a run adds (the text planner): its reference source over the planned one, a caption, an early end.
 
     `wrap_reference(planned, limits, truth)` returns the source the session ticks; `truth()` is the
-    backend's ground truth at the tick (None: no simulator behind the robot). `caption()` is written
+    simulator's ground truth at the tick, also where the controller reads the simulator directly
+    (None: no simulator behind the robot, a real one). `caption()` is written
     on each video frame and on the status line; `done()` ends the run before its duration. The
     simulator (`sim_run`) and a real robot (`robot_run`) take the same hooks.
     """

@@ -155,7 +155,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
             planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed, follower=follower
         )
         stack.callback(planned.close)
-        reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits, backend.truth)
+        # The truth is the simulated robot here, on every backend (the DDS G1's mirror too), the simulator directly included.
+        reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits, robot.read)
     elif follower is not None:
         reference = WaypointReference(follower)
     session = Session(backend, tracker, source, reference)
