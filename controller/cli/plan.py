@@ -10,7 +10,8 @@ over DDS, or a real G1 over DDS), the planner in the loop, and prints what each 
 measured: by the simulator's truth where one stands behind the robot, else by the controller's
 own estimate (`measured_by` in the report). A prompt the stack cannot plan is refused with one
 line naming the part and what it can do (exit status 2); a plan that walks or turns, on a robot
-whose state has no base position, is refused at its start with one line (exit status 1).
+whose state has no base position, is refused at its start with one line (exit status 1), and a
+run that a fault ended damped says so in one line (exit status 1).
 """
 
 from __future__ import annotations
@@ -81,7 +82,10 @@ def run(args: argparse.Namespace) -> int:
     for key, path in (("video", args.video), ("report", args.report)):
         if path is not None:
             print(f"{key}: {path}")
-    return 1 if report["falls"] else 0
+    from controller.cli.sim import print_fault_ending  # noqa: PLC0415
+
+    faulted = print_fault_ending(report["run"])  # hardware: a stale robot, a motor fault; the robot damped
+    return 1 if report["falls"] or faulted else 0
 
 
 def _real_robot(args: argparse.Namespace) -> bool:
