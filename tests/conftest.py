@@ -212,6 +212,20 @@ def claim_dds_domain() -> Iterator[Callable[[], int]]:
         held.release()
 
 
+def a_robot_config(tmp_path: Path, domain: int) -> Path:
+    """A copy of the shipped real G1 config (`g1-dds.yaml`) pointed at loopback on `domain`, where a stand-in robot
+    (`g1ctl robot --dds`) answers."""
+    from hw.shipped import config_dir
+
+    text = (config_dir("hardware") / "g1-dds.yaml").read_text()
+    assert "dds: {domain: 0, interface: eth0, peers: []," in text
+    path = tmp_path / "my-g1.yaml"
+    text = text.replace("dds: {domain: 0, interface: eth0, peers: [],", f"dds: {{domain: {domain}, interface: lo, peers: [127.0.0.1],")
+    # The stand-in robot starts standing in the default pose, off any gantry: a 3 s ramp under PD alone would tip it over.
+    path.write_text(text.replace("soft_start_time: 3.0", "soft_start_time: 0.2"))
+    return path
+
+
 @pytest.fixture
 def sim_dds_config(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> Callable[[], Path]:
     """A function that writes a copy of the shipped sim-dds hardware config on a DDS domain of its own (`claim_dds_domain`)."""

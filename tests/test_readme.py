@@ -10,14 +10,14 @@
   show your own files (`my-g1.yaml`).
 - The README's cheap commands really run, in a subprocess in a temporary directory (their outputs,
   such as `runs/...`, land there): `g1ctl scenarios`, `g1ctl hw frame encode|decode`, `g1ctl plan
-  PROMPT` without `--sim` (the decomposition), and each `g1ctl sim` that needs neither a display,
+  PROMPT` without `--sim` or `--hardware` (the decomposition), and each `g1ctl sim` that needs neither a display,
   the wall clock, an interactive input, hardware nor a video, bounded to 1 s of simulated time
   (`--duration 1` appended: the last one wins). The others are only parsed, because running them
   here is slow or needs what a test machine lacks: `g1ctl run` and `sim --input keyboard` are
   interactive and paced to the wall clock; `sim --hardware` runs the buses about as fast as real
   time and `sim-dds` starts a DDS robot process (DDS tests must not run beside each other);
   `--video` renders every frame; `hw` operations open hardware; `robot` serves DDS until stopped;
-  `plan --sim` and `eval` take tens of seconds to minutes.
+  `plan --sim`, `plan --hardware` and `eval` take tens of seconds to minutes.
 - The Python examples of the README and docs/ run as written.
 """
 
@@ -186,7 +186,7 @@ def runs_here(command: Command) -> bool:
     if argv[:1] == ("scenarios",) or argv[:2] == ("hw", "frame"):
         return True
     if argv[:1] == ("plan",):
-        return "--sim" not in argv
+        return "--sim" not in argv and "--hardware" not in argv
     if argv[:1] == ("sim",):
         interactive = any(flag in argv for flag in ("--viewer", "--realtime", "--hardware", "--faults", "--video"))
         return not interactive and ("--input" not in argv or argv[argv.index("--input") + 1] == "scripted")

@@ -1,27 +1,39 @@
-"""`g1ctl plan PROMPT`: a typed instruction resolved into clauses, and run on the simulated G1 with --sim.
+"""`g1ctl plan PROMPT`: a typed instruction resolved into clauses, and run on the G1 with --sim or --hardware NAME.
 
 g1ctl plan "walk forward two meters, then turn left 90 degrees, then wave with your right hand"
-           [--sim] [--video runs/plan.mp4] [--report runs/plan.json] [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress]
+           [--sim | --hardware sim-can|sim-mixed|sim-dds|g1-dds|PATH] [--video runs/plan.mp4] [--report runs/plan.json]
+           [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress]
 
-Prints the decomposition (clauses, resolved quantities, gestures); with --sim runs it through
-the planner in the loop and prints what each clause did, measured. A prompt the stack cannot
-plan is refused with one line naming the part and what it can do (exit status 2).
+Prints the decomposition (clauses, resolved quantities, gestures); with --sim runs it on the
+simulated G1 directly, with --hardware through that hardware (simulated buses, the simulated G1
+over DDS, or a real G1 over DDS), the planner in the loop, and prints what each clause did,
+measured: by the simulator's truth where one stands behind the robot, else by the controller's
+own estimate (`measured_by` in the report). A prompt the stack cannot plan is refused with one
+line naming the part and what it can do (exit status 2); a plan that walks or turns, on a robot
+whose state has no base position, is refused at its start with one line (exit status 1), and a
+run that a fault ended damped says so in one line (exit status 1).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from hw.errors import ConfigError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    plan = sub.add_parser("plan", help="plan a typed instruction into clauses and run it on the simulated G1 (--sim)")
+    plan = sub.add_parser("plan", help="plan a typed instruction into clauses and run it on the G1 (--sim, or --hardware NAME)")
     plan.add_argument("prompt", help='what the robot should do, e.g. "walk forward two meters, then wave"')
-    plan.add_argument("--sim", action="store_true", help="run the plan on the simulated G1")
-    plan.add_argument("--video", type=Path, default=None, help="with --sim: an .mp4 or .gif of the run, the current clause as a caption")
+    plan.add_argument("--sim", action="store_true", help="run the plan on the simulated G1 directly")
+    plan.add_argument(
+        "--hardware", default=None, help="run the plan through this hardware: simulated (sim-can, sim-mixed, sim-dds) or a real G1 (g1-dds)"
+    )
+    plan.add_argument(
+        "--video", type=Path, default=None, help="on the simulator: an .mp4 or .gif of the run, the current clause as a caption"
+    )
     plan.add_argument("--report", type=Path, default=None, help="write the JSON report here")
     plan.add_argument("--seed", type=int, default=0)
     plan.add_argument("--policy", default="fastsac", help="locomotion policy preset of the tracker")
@@ -33,9 +45,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.video is not None and not args.sim:
-        raise ConfigError("--video needs --sim: only a simulated run has something to film")
-    if args.video is not None:
+    if args.sim and args.hardware is not None:
+        raise ConfigError("--sim and --hardware: choose one (--sim: the simulator directly; --hardware NAME: through that hardware)")
+    runs = args.sim or args.hardware is not None
+    if args.video is not None and not runs:
+        raise ConfigError("--video needs a run to film: add --sim, or --hardware with simulated hardware (sim-can, sim-mixed, sim-dds)")
+    on_robot = args.hardware is not None and _real_robot(args)
+    if args.video is not None and not on_robot:
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()  # before MuJoCo is imported
@@ -44,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     planner = TextPlanner.load(condition_text=not args.no_text)
     program = planner.resolve(args.prompt)
     print(planner.describe(program))
-    if not args.sim:
+    if not runs:
         if args.report is not None:
             from controller.reports import write_report  # noqa: PLC0415
 
@@ -52,17 +68,42 @@ def run(args: argparse.Namespace) -> int:
             print(f"report: {args.report}")
         return 0
     report = planner.simulate(program, seed=args.seed, policy=args.policy, video=args.video, report=args.report,
-                              blend=not args.naive, progress=args.progress)  # fmt: skip
+                              blend=not args.naive, progress=args.progress, hardware=args.hardware,
+                              status=on_robot and sys.stderr.isatty())  # fmt: skip
     for c in report["clauses"]:
-        forward, left = c["displacement"]
         flags = " (timed out)" if c["timed_out"] else ""
         print(
-            f"{c['start_s']:6.2f}-{c['end_s']:6.2f} s  {c['text']!r}: moved {forward:+.2f} m forward, {left:+.2f} m left, "
+            f"{c['start_s']:6.2f}-{c['end_s']:6.2f} s  {c['text']!r}: {_moved(c['displacement'])}, "
             f"turned {c['heading_change_deg']:+.0f} deg, gestures {c['gestures'] or 'none'}{flags}"
         )
-    keys = ("total_displacement", "total_heading_change_deg", "order_accuracy", "transition_score", "falls")
-    print(json.dumps({k: report[k] for k in keys}))
+    keys = ("measured_by", "total_displacement", "total_displacement_estimate", "total_heading_change_deg",
+            "total_heading_change_deg_estimate", "order_accuracy", "transition_score", "falls")  # fmt: skip
+    print(json.dumps({k: report[k] for k in keys if k in report}))
     for key, path in (("video", args.video), ("report", args.report)):
         if path is not None:
             print(f"{key}: {path}")
-    return 1 if report["falls"] else 0
+    from controller.cli.sim import print_fault_ending  # noqa: PLC0415
+
+    faulted = print_fault_ending(report["run"])  # hardware: a stale robot, a motor fault; the robot damped
+    return 1 if report["falls"] or faulted else 0
+
+
+def _real_robot(args: argparse.Namespace) -> bool:
+    """`--hardware` names a real G1; the options a robot cannot honour are refused here, before anything loads."""
+    from controller.runtime.run_config import SimRunConfig, is_real_robot  # noqa: PLC0415
+
+    if not is_real_robot(args.hardware):
+        return False
+    from controller.runtime.robot_run import robot_config  # noqa: PLC0415 - the g1 extra, no MuJoCo
+
+    robot_config(SimRunConfig(hardware=args.hardware, video=args.video))  # one line for --video, as `g1ctl run` says it
+    if args.progress:
+        raise ConfigError("--progress: not on a real robot (the status line shows the run and the clause running)")
+    return True
+
+
+def _moved(displacement: list[float] | None) -> str:
+    if displacement is None:
+        return "moved ? (no base position)"
+    forward, left = displacement
+    return f"moved {forward:+.2f} m forward, {left:+.2f} m left"

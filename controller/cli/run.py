@@ -51,8 +51,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from controller.cli.sim import is_real_robot, run_and_summarize  # noqa: PLC0415
-    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
+    from controller.cli.sim import run_and_summarize  # noqa: PLC0415
+    from controller.runtime.run_config import SimRunConfig, is_real_robot  # noqa: PLC0415
 
     on_robot = args.hardware is not None and is_real_robot(args.hardware)  # a real G1: no viewer, its own remote by default
     viewer = not on_robot and not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))

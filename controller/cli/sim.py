@@ -70,19 +70,13 @@ def run(args: argparse.Namespace) -> int:
     return run_and_summarize(cfg)
 
 
-def is_real_robot(hardware: str) -> bool:
-    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
-    from hw.jointmap import load_robot_config  # noqa: PLC0415
-
-    config = load_robot_config(hardware)
-    return isinstance(config, DdsHardwareConfig) and not config.simulated
-
-
 def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
     """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault.
 
     `on_robot`: a real robot's config (`simulated: false`) drives that robot (`g1ctl run`); otherwise it is refused.
     """
+    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+
     if cfg.hardware is not None and is_real_robot(cfg.hardware):
         if not on_robot:
             hardware = cfg.hardware
@@ -109,13 +103,19 @@ def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
         hw = report["hw"]
         keys = ("cycle_ms", "frames_sent", "frames_received", "dropped", "commands_sent", "states_received", "crc_errors", "faults")
         print(json.dumps({"hw": {k: hw[k] for k in keys if k in hw}}))
-    faulted = report["final_mode"] == "damp" and report["damp_reason"].startswith("fault")
-    if faulted:
-        print(f"g1ctl: run ended damped at {report['damp_time']} s: {report['damp_reason']}", file=sys.stderr)
+    faulted = print_fault_ending(report)
     if "drill" in report:  # a drill: the fault was the point, its verdict is the exit status
         print(drill_line(report["drill"]))
         return 0 if report["drill"]["passed"] else 1
     return 1 if faulted else 0
+
+
+def print_fault_ending(report: dict[str, Any]) -> bool:
+    """One line on stderr when the run ended damped by a fault; True then (the exit status is 1)."""
+    faulted = bool(report["final_mode"] == "damp" and report["damp_reason"].startswith("fault"))
+    if faulted:
+        print(f"g1ctl: run ended damped at {report['damp_time']} s: {report['damp_reason']}", file=sys.stderr)
+    return faulted
 
 
 def drill_line(drill: dict[str, Any]) -> str:

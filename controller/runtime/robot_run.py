@@ -5,7 +5,9 @@ The same session, trackers, inputs and planner as `g1ctl sim`; the backend is th
 fault). Nothing here imports MuJoCo: the joint limits the planner keeps to come from the
 hardware config. There is no ground truth on a robot, so the report gives what the robot
 measures (the commanded and measured yaw rate, faults, counters, the state at the end); a
-fall is the pelvis tilted past 60 degrees by the IMU, and ends the run damped.
+fall is the pelvis tilted past 60 degrees by the IMU, and ends the run damped. A job built on a run (the
+text planner) comes in through the same `RunHooks` as on the simulator: its reference over the planned one,
+its caption on the status line (there is no video), its early end.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import math
 import sys
 import time
 from contextlib import ExitStack
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,7 +27,7 @@ from controller.reports import write_report
 from controller.runtime.dds_backend import DdsBackend
 from controller.runtime.estimation import attach_estimator
 from controller.runtime.loop import RateLoop, RunClock, SimulationClock
-from controller.runtime.run_config import SimRunConfig
+from controller.runtime.run_config import RunHooks, SimRunConfig
 from controller.runtime.session import Session
 from controller.runtime.status import StatusLine
 from controller.tracking.registry import TrackerSpec, make_tracker
@@ -35,6 +37,9 @@ from hw.dds.robot import DdsRobot
 from hw.errors import ConfigError, HardwareFault, RunAborted
 from hw.jointmap import load_robot_config
 from hw.realtime import request_realtime
+
+if TYPE_CHECKING:
+    from controller.reference.source import ReferenceSource
 
 MAX_TILT_DEG = 60.0  # the simulator's fall threshold (`sim.robot.FallConfig`), from the IMU here
 
@@ -58,9 +63,11 @@ def robot_config(cfg: SimRunConfig) -> DdsHardwareConfig:
     return hardware
 
 
-def run(cfg: SimRunConfig) -> dict[str, Any]:
-    """Bring the robot up, run the input until its end (or Ctrl-C, a fault, a fall), damp, report."""
+def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
+    """Bring the robot up, run the input until its end (or Ctrl-C, a fault, a fall, the job's `hooks.done()`), damp, report."""
     hardware = robot_config(cfg)
+    if hooks is not None and not cfg.planner:
+        raise ConfigError("this run plans whole-body motion: it needs the planner in the loop (planner=True)")
     scenario = load_scenario(cfg.scenario) if cfg.input == "scripted" else None
     duration = cfg.duration if cfg.duration is not None else (scenario.duration if scenario else None)
     assets = ensure_assets(cfg.assets_dir)
@@ -76,7 +83,7 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
         source = stack.enter_context(
             open_input(cfg.input, tracker.command_limits, cfg.scenario, duration or 0.0, cfg.seed, hardware=cfg.hardware)
         )
-        reference = None
+        reference: ReferenceSource | None = None
         if cfg.planner:
             from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime session of the planner
             from controller.reference.planned import PlannedReference  # noqa: PLC0415
@@ -86,19 +93,21 @@ def run(cfg: SimRunConfig) -> dict[str, Any]:
             limits = np.array([hardware.joints[name].position_limits for name in g1.JOINT_NAMES])
             planned = PlannedReference(planner.plan, simulated_clock=False, joint_limits=(limits[:, 0], limits[:, 1]), seed=cfg.seed)
             stack.callback(planned.close)
-            reference = planned
+            reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits, backend.truth)
         estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)  # a robot: always
         session = Session(backend, tracker, source, reference, estimated)
         status = StatusLine(sys.stderr) if cfg.status else None
         loop = RateLoop(SimulationClock(backend.now, backend.advance_to), tracker.rate_hz)
+        caption = hooks.caption if hooks is not None else None
+        done = hooks.done if hooks is not None else None
         wall_start = time.perf_counter()
         try:
             session.start()
             for _ in loop.run(duration):
                 going_on = session.tick()
                 if status is not None:
-                    status.update(session)
-                if not going_on:
+                    status.update(session, caption() if caption is not None else "")
+                if not going_on or (done is not None and done()):
                     break
         except HardwareFault as exc:  # bring-up failed: the robot damps, the run ends as a fault
             session.fail(str(exc))

@@ -1,15 +1,21 @@
 """What a run is asked to do: `g1ctl sim` and `g1ctl run` parse into this; the simulator and the real robot both take it.
 
-Apart from `sim_run` so that a run on a real robot (`robot_run`) reads it without importing MuJoCo.
+Apart from `sim_run` so that a run on a real robot (`robot_run`) reads it without importing MuJoCo: the config,
+the hooks a job built on a run adds (the text planner), and whether a hardware config names a real robot.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from controller.commands.velocity import CommandLimits
+    from controller.reference.planned import PlannedReference
+    from controller.reference.source import ReferenceSource
+    from hw.types import RobotState
     from sim.perturbations import Perturbations
 
 
@@ -39,3 +45,28 @@ class SimRunConfig:
     cpu: int | None = None  # on a real robot: pin the run to this CPU
     estimator: bool = False  # estimate the base position on the simulator too (every other robot always runs the estimator)
     estimator_config: str | None = None  # the estimator's YAML (None: configs/estimator.yaml)
+
+
+@dataclass(frozen=True)
+class RunHooks:
+    """What a job built on a run adds (the text planner): its reference source over the planned one, a caption, an early end.
+
+    `wrap_reference(planned, limits, truth)` returns the source the session ticks; `truth()` is the
+    simulator's ground truth at the tick, also where the controller reads the simulator directly
+    (None: no simulator behind the robot, a real one). `caption()` is written
+    on each video frame and on the status line; `done()` ends the run before its duration. The
+    simulator (`sim_run`) and a real robot (`robot_run`) take the same hooks.
+    """
+
+    wrap_reference: Callable[[PlannedReference, CommandLimits, Callable[[], RobotState | None]], ReferenceSource]
+    caption: Callable[[], str] | None = None
+    done: Callable[[], bool] | None = None
+
+
+def is_real_robot(hardware: str) -> bool:
+    """`hardware` names a real G1 over DDS (`simulated: false`): it runs through `robot_run`, with no simulator."""
+    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
+    from hw.jointmap import load_robot_config  # noqa: PLC0415
+
+    config = load_robot_config(hardware)
+    return isinstance(config, DdsHardwareConfig) and not config.simulated

@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
-from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -28,7 +27,7 @@ from controller.runtime.backend import Backend
 from controller.runtime.estimation import attach_estimator
 from controller.runtime.loop import RateLoop, RealtimeSimulationClock, SimulationClock
 from controller.runtime.plots import plot_tracking
-from controller.runtime.run_config import SimRunConfig
+from controller.runtime.run_config import RunHooks, SimRunConfig
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend, PerturbedSimBackend, SimulatedHardwareBackend
 from controller.runtime.status import StatusLine
@@ -43,22 +42,7 @@ from sim.robot import SimRobot
 from sim.world import SceneConfig, build_model
 
 if TYPE_CHECKING:
-    from controller.commands.velocity import CommandLimits
-    from controller.reference.planned import PlannedReference
     from controller.reference.source import ReferenceSource
-
-
-@dataclass(frozen=True)
-class RunHooks:
-    """What a job built on `g1ctl sim` adds (the text planner): its reference source over the planned one, a caption, an early end.
-
-    `wrap_reference(planned, limits)` returns the source the session ticks; `caption()` is
-    written on each video frame; `done()` ends the run before its duration.
-    """
-
-    wrap_reference: Callable[[PlannedReference, CommandLimits], ReferenceSource]
-    caption: Callable[[], str] | None = None
-    done: Callable[[], bool] | None = None
 
 
 def _check(cfg: SimRunConfig) -> float | None:
@@ -173,7 +157,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
             planner.plan, simulated_clock=not realtime, joint_limits=robot.joint_limits(), seed=cfg.seed, follower=follower
         )
         stack.callback(planned.close)
-        reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits)
+        # The truth is the simulated robot here, on every backend (the DDS G1's mirror too), the simulator directly included.
+        reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits, robot.read)
     elif follower is not None:
         reference = WaypointReference(follower)
     estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)
@@ -232,7 +217,7 @@ def _drive(run: _BuiltRun, duration: float | None) -> _Outcome:
             if run.viewer is not None:
                 _sync_viewer(run.viewer, run.ghost, ghost)
             if run.status is not None:
-                run.status.update(session)
+                run.status.update(session, caption() if caption is not None else "")
             if tick % 10 == 9:
                 run.bar.update(10)
             if not going_on or (done is not None and done()):

@@ -21,12 +21,13 @@ class StatusLine:
         self._next = 0.0
         self._width = 0
 
-    def update(self, session: Session) -> None:
+    def update(self, session: Session, caption: str = "") -> None:
+        """Refresh the line (at most every `refresh_s`); `caption`: what a job is doing now (the text plan's clause), at its end."""
         now = time.monotonic()
         if now < self._next:
             return
         self._next = now + self.refresh_s
-        self._write(format_status(session))
+        self._write(" | ".join(part for part in (format_status(session), caption) if part))
 
     def close(self) -> None:
         if self._width:

@@ -25,7 +25,11 @@ the gesture library):
 A clause ends when its follower has settled on the last target and its minimum duration
 has passed, or, failing that, after a timeout (reported). Everything measured per clause
 (start and end pose, unwrapped heading change, the executed frames) is kept for the
-report. No MuJoCo, no torch.
+report, in two views: the controller's own state (what it steered by: the estimate on
+hardware), and the simulator's truth at the same tick where one stands behind the robot
+(`truth`), which judges the run. A program that walks or turns needs the base's position:
+on a robot whose state has none (`RobotState.has_base_position`) it is refused at the start.
+No MuJoCo, no torch.
 """
 
 from __future__ import annotations
@@ -78,27 +82,57 @@ class TextRunConfig:
 
 
 @dataclass
+class PoseTrack:
+    """Where the robot went during one clause, as one view saw it: the controller's state, or the simulator's truth."""
+
+    start_pose: Pose
+    has_position: bool  # False: this view has no base position (it reads zero), only its heading counts
+    end_pose: Pose | None = None
+    heading_change: float = 0.0  # rad, unwrapped, positive to the left
+    last_heading: float = 0.0  # wrapped, for unwrapping
+
+    @classmethod
+    def begin(cls, state: RobotState) -> PoseTrack:
+        pose = _pose(state)
+        return cls(pose, state.has_base_position, last_heading=pose[2])
+
+    def measure(self, state: RobotState) -> None:
+        heading = float(quat.heading(state.base_quat))
+        self.heading_change += float(quat.wrap_angle(heading - self.last_heading))
+        self.last_heading = heading
+
+    def end(self, state: RobotState) -> None:
+        self.end_pose = _pose(state)
+
+    @property
+    def displacement(self) -> tuple[float, float] | None:
+        """(forward, left) in metres, in the frame of the robot at the clause's start; None without a base position."""
+        if not self.has_position:
+            return None
+        if self.end_pose is None:
+            return (0.0, 0.0)
+        return to_frame(self.start_pose, self.end_pose[:2])
+
+
+@dataclass
 class ClauseRecord:
     """What happened while one clause ran (times in seconds from the run's start)."""
 
     index: int
     clause: Clause
     start_s: float
-    start_pose: Pose  # measured
-    intended_start: Pose  # where the program meant this clause to start
+    estimate: PoseTrack  # the controller's own view, what it steered by: the estimate on hardware (on the simulator, the truth)
+    intended_start: Pose  # where the program meant this clause to start (in the controller's view)
+    truth: PoseTrack | None = None  # the simulator's truth over the same ticks; None: no simulator behind the robot
     end_s: float | None = None
-    end_pose: Pose | None = None
-    heading_change: float = 0.0  # rad, measured, unwrapped, positive to the left
     timed_out: bool = False
-    frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick
+    frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick, in the judged view
     reference: list[FloatArray] = field(default_factory=list)  # the planned reference's qpos [36], one per tick
 
     @property
-    def displacement(self) -> tuple[float, float]:
-        """Measured (forward, left) in metres, in the frame of the robot at the clause's start."""
-        if self.end_pose is None:
-            return (0.0, 0.0)
-        return to_frame(self.start_pose, self.end_pose[:2])
+    def judged(self) -> PoseTrack:
+        """The view the report judges by: the truth where a simulator stands behind the robot, else the controller's."""
+        return self.truth if self.truth is not None else self.estimate
 
 
 def to_frame(origin: Pose, point: tuple[float, float] | Pose) -> tuple[float, float]:
@@ -138,8 +172,10 @@ class TextReference(ReferenceSource):
         cfg: TextRunConfig = TextRunConfig(),
         limits: CommandLimits | None = None,
         embed: Callable[[str], FloatArray] | None = None,  # clause text -> the planner's text embedding; None: no text
+        truth: Callable[[], RobotState | None] | None = None,  # the simulator's truth at the tick (`Backend.truth`)
     ) -> None:
         self.program = program
+        self.truth = truth
         self.planned = planned
         self.cfg = cfg
         self.limits = limits
@@ -149,7 +185,6 @@ class TextReference(ReferenceSource):
         self.now = 0.0  # run time of the latest tick
         self._t0 = 0.0
         self._intended: Pose = (0.0, 0.0, 0.0)
-        self._heading: float | None = None  # last measured heading (wrapped), for unwrapping
         self._deadline = math.inf
 
     @property
@@ -166,13 +201,14 @@ class TextReference(ReferenceSource):
         return "done" if self.finished_at is not None else ""
 
     def start(self, state: RobotState) -> None:
+        _check_position(self.program, state)
         self.planned.locomotion.hold_free_arms = self.cfg.hold_free_arms
         self.planned.start(state)
         if self.records:  # a restart after a fall: the clause running goes on from where the robot is
             return
         self._t0 = state.time
         self._intended = _pose(state)
-        self._begin(0, state)
+        self._begin(0, state, self._truth())
 
     def finished_for(self, seconds: float) -> bool:
         """The last clause ended at least `seconds` ago (the robot has had time to come to rest)."""
@@ -182,11 +218,12 @@ class TextReference(ReferenceSource):
         self.now = state.time - self._t0
         current = self.current
         if current is not None and not hold:
-            self._measure(current, state)
+            truth = self._truth()
+            self._measure(current, state, truth)
             if self._clause_over(current, state):
-                self._end(current, state)
+                self._end(current, state, truth)
                 if current.index + 1 < len(self.program.clauses):
-                    self._begin(current.index + 1, state)
+                    self._begin(current.index + 1, state, truth)
                 else:
                     self.finished_at = state.time - self._t0
                     self.planned.follower = None
@@ -199,11 +236,14 @@ class TextReference(ReferenceSource):
             running.reference.append(np.array(window.plan.qpos))
         return window
 
-    def _begin(self, index: int, state: RobotState) -> None:
+    def _truth(self) -> RobotState | None:
+        return self.truth() if self.truth is not None else None
+
+    def _begin(self, index: int, state: RobotState, truth: RobotState | None) -> None:
         clause = self.program.clauses[index]
         t = state.time - self._t0
-        record = ClauseRecord(index, clause, round(t, 4), _pose(state), self._intended)
-        self._heading = float(quat.heading(state.base_quat))
+        truth_track = PoseTrack.begin(truth) if truth is not None else None
+        record = ClauseRecord(index, clause, round(t, 4), PoseTrack.begin(state), self._intended, truth_track)
         follower = None
         if clause.motion is not None:
             waypoints = []
@@ -219,22 +259,22 @@ class TextReference(ReferenceSource):
         self.planned.locomotion.text_embedding = self.embed(clause.text) if self.embed is not None else None
         if index > 0:
             self.planned.start_segment(self.cfg.blend_frames)
-        self._deadline = t + self.timeout_s(clause, record.intended_start, record.start_pose)
+        self._deadline = t + self.timeout_s(clause, record.intended_start, record.estimate.start_pose)
         self.records.append(record)
 
     def timeout_s(self, clause: Clause, intended_start: Pose, pose: Pose) -> float:
         """How long the clause may run from `pose` before it is given up."""
         return self.cfg.timeout_factor * estimate_seconds(clause, intended_start, pose) + self.cfg.timeout_margin_s
 
-    def _measure(self, record: ClauseRecord, state: RobotState) -> None:
-        heading = float(quat.heading(state.base_quat))
-        if self._heading is not None:
-            record.heading_change += float(quat.wrap_angle(heading - self._heading))
-        self._heading = heading
+    def _measure(self, record: ClauseRecord, state: RobotState, truth: RobotState | None) -> None:
+        record.estimate.measure(state)
+        if record.truth is not None and truth is not None:
+            record.truth.measure(truth)
+        judged = truth if truth is not None else state
         frame = np.empty(g1.QPOS_SIZE)
-        frame[g1.QPOS_ROOT_POS] = state.base_pos
-        frame[g1.QPOS_ROOT_QUAT] = state.base_quat
-        frame[g1.QPOS_JOINTS] = state.joint_pos
+        frame[g1.QPOS_ROOT_POS] = judged.base_pos
+        frame[g1.QPOS_ROOT_QUAT] = judged.base_quat
+        frame[g1.QPOS_JOINTS] = judged.joint_pos
         record.frames.append(frame)
 
     def _clause_over(self, record: ClauseRecord, state: RobotState) -> bool:
@@ -248,15 +288,27 @@ class TextReference(ReferenceSource):
             return True
         return False
 
-    def _end(self, record: ClauseRecord, state: RobotState) -> None:
+    def _end(self, record: ClauseRecord, state: RobotState, truth: RobotState | None) -> None:
         record.end_s = round(state.time - self._t0, 4)
-        record.end_pose = _pose(state)
+        record.estimate.end(state)
+        if record.truth is not None and truth is not None:
+            record.truth.end(truth)
 
     def report(self) -> dict[str, Any]:
         return self.planned.report() | {"clauses_done": sum(r.end_s is not None for r in self.records)}
 
     def close(self) -> None:
         self.planned.close()
+
+
+def _check_position(program: Program, state: RobotState) -> None:
+    """A program that walks or turns steers its base to positions: refused where the state has none (it reads zero)."""
+    moving = next((clause for clause in program.clauses if clause.motion is not None), None)
+    if moving is not None and not state.has_base_position:
+        raise ConfigError(
+            f"the text plan moves the base ('{moving.text}') to positions, but this robot's state has no base position estimate "
+            "(the simulator gives it; on hardware the state estimator does)"
+        )
 
 
 def _pose(state: RobotState) -> Pose:

@@ -1,14 +1,18 @@
-"""`g1ctl plan PROMPT --sim`: a resolved program executed on the simulated G1, with its text report.
+"""`g1ctl plan PROMPT --sim|--hardware NAME`: a resolved program executed on the G1, with its text report.
 
-Build the `g1ctl sim` run on the `stand` scenario with the planner in the loop, put a
-`TextReference` over the planned reference, end the run once the last clause has ended
-and the robot has had a moment to come to rest, then add the text report (clauses,
-totals, order, transitions) to the run's report. The simulated run imports MuJoCo (through
-`sim_run`) when it starts; the composed plan on paper (`composed_transition_score`) does not.
+Build the `g1ctl sim` run (or, on a real G1, the `g1ctl run` one) with the planner in the loop,
+put a `TextReference` over the planned reference through the run's `RunHooks`, end the run once
+the last clause has ended and the robot has had a moment to come to rest, then add the text
+report (clauses, totals, order, transitions) to the run's report. On the simulator, directly or
+through simulated hardware (`hardware`), the run stands on the `stand` scenario and imports
+MuJoCo (through `sim_run`) when it starts; on a real G1 (`robot_run`, no MuJoCo) the robot's own
+remote is the input, so its E-stop stays in hand, and the current clause goes on the status
+line. The composed plan on paper (`composed_transition_score`) imports neither.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -21,6 +25,7 @@ from controller.text.metrics import Embed
 from controller.text.program import Program
 from controller.text.report import Detect, text_report
 from controller.tracking.presets import policy_rate_hz
+from hw.types import RobotState
 
 SETTLE_S = 1.0  # the run goes on this long after the last clause
 MAX_SECONDS = 180.0
@@ -34,6 +39,8 @@ class TextSimConfig:
     report: Path | None = None
     progress: bool = False
     assets_dir: str | None = None
+    hardware: str | None = None  # through this hardware (simulated buses, the simulated G1 over DDS, a real G1); None: the simulator
+    status: bool = False  # a live status line on stderr, with the clause running
     run: TextRunConfig = field(default_factory=TextRunConfig)
 
 
@@ -46,17 +53,17 @@ def budget_seconds(program: Program, cfg: TextRunConfig) -> float:
 
 
 def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Detect, text_embedding: Any = None) -> dict[str, Any]:
-    """Execute `program` in simulation; the report holds the run's figures and the text report.
+    """Execute `program` on the simulator, through `cfg.hardware`, or on a real G1; the report holds the run's figures and the
+    text report.
 
     `text_embedding`: clause text -> the planner's text conditioning (None: the planner gets no text).
     """
-    from controller.runtime.sim_run import RunHooks, SimRunConfig  # noqa: PLC0415 - imports MuJoCo
-    from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415
+    from controller.runtime.run_config import RunHooks, SimRunConfig, is_real_robot  # noqa: PLC0415
 
     holder: list[TextReference] = []
 
-    def wrap(planned: PlannedReference, limits: CommandLimits) -> TextReference:
-        holder.append(TextReference(program, planned, cfg.run, limits, text_embedding))
+    def wrap(planned: PlannedReference, limits: CommandLimits, truth: Callable[[], RobotState | None]) -> TextReference:
+        holder.append(TextReference(program, planned, cfg.run, limits, text_embedding, truth))
         return holder[0]
 
     hooks = RunHooks(
@@ -64,11 +71,20 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
         caption=lambda: holder[0].caption if holder else "",
         done=lambda: bool(holder) and holder[0].finished_for(SETTLE_S),
     )
-    sim_cfg = SimRunConfig(
+    on_robot = cfg.hardware is not None and is_real_robot(cfg.hardware)
+    run_cfg = SimRunConfig(
         scenario="stand", policy=cfg.policy, planner=True, duration=budget_seconds(program, cfg.run), seed=cfg.seed,
-        video=cfg.video, report=None, plot=None, progress=cfg.progress, assets_dir=cfg.assets_dir,
+        input="unitree-remote" if on_robot else "scripted", video=cfg.video, report=None, plot=None, progress=cfg.progress,
+        assets_dir=cfg.assets_dir, hardware=cfg.hardware, status=cfg.status,
     )  # fmt: skip
-    report = run_sim(sim_cfg, hooks)
+    if on_robot:
+        from controller.runtime.robot_run import run as run_robot  # noqa: PLC0415 - the g1 extra, no MuJoCo
+
+        report = run_robot(run_cfg, hooks)
+    else:
+        from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
+
+        report = run_sim(run_cfg, hooks)
     reference = holder[0]
     text = text_report(reference, policy_rate_hz(cfg.policy), embed, detect)  # one executed frame per tick of the policy
     out = {"prompt": program.prompt} | text | {"falls": report["falls"], "run": report}

@@ -1,7 +1,8 @@
 """The text planner as one object: the sentence encoder loaded once, prompts resolved, programs run.
 
 What `g1ctl plan` and `g1ctl bench text` share: resolution (`resolve`), the printable
-decomposition (`describe`), a simulated run with its report (`simulate`, imports MuJoCo),
+decomposition (`describe`), a run with its report (`simulate`: on the simulator, through simulated
+hardware, or on a real G1),
 and the composed plan's transition score on paper (`composed_transition`). The planner's
 text slot gets each clause's sentence embedding when the shipped planner was trained with
 text (`text_conditioned` in its spec) and the caller asks for it (`condition_text`).
@@ -55,12 +56,13 @@ class TextPlanner:
 
     def simulate(
         self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,
-        blend: bool = True, progress: bool = False,
+        blend: bool = True, progress: bool = False, hardware: str | None = None, status: bool = False,
     ) -> dict[str, Any]:  # fmt: skip
-        """Run `program` on the simulated G1: the text report, with the run's report under "run"."""
-        from controller.text.job import TextSimConfig, run_text_sim  # noqa: PLC0415 - imports MuJoCo
+        """Run `program` on the simulated G1 (through `hardware` when given, or on the real G1 it names): the text report,
+        with the run's report under "run"."""
+        from controller.text.job import TextSimConfig, run_text_sim  # noqa: PLC0415
 
-        cfg = TextSimConfig(policy=policy, seed=seed, video=video, report=report, progress=progress)
+        cfg = TextSimConfig(policy=policy, seed=seed, video=video, report=report, progress=progress, hardware=hardware, status=status)
         if not blend:
             cfg = replace(cfg, run=replace(cfg.run, blend_frames=None))
         return run_text_sim(program, cfg, self.encoder.embed, detect_gestures, self.text_embedding())

@@ -1,7 +1,9 @@
-"""`g1ctl plan` and `g1ctl bench text` end to end, in a subprocess: decomposition, a simulated run, refusals."""
+"""`g1ctl plan` and `g1ctl bench text` end to end, in a subprocess: decomposition, a simulated run, a run through simulated
+buses, refusals."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -31,6 +33,45 @@ def test_plan_runs_in_simulation_and_reports_each_clause(tmp_path: Path) -> None
     assert report["total_displacement"][0] == pytest.approx(1.0, abs=0.25)
     assert report["order_accuracy"] == 1.0 and report["transition_score"] is not None
     assert {"text", "start_s", "end_s", "displacement", "heading_change_deg", "gestures"} <= set(walk)
+    # On the simulator directly the controller's view is the truth itself: the two sets of figures agree exactly.
+    assert report["measured_by"] == "truth"
+    for clause in report["clauses"]:
+        assert clause["displacement_estimate"] == clause["displacement"]
+        assert clause["heading_change_deg_estimate"] == clause["heading_change_deg"]
+    assert report["total_displacement_estimate"] == report["total_displacement"]
+    assert report["total_heading_change_deg_estimate"] == report["total_heading_change_deg"]
+
+
+@pytest.mark.slow
+def test_plan_runs_through_simulated_buses_judged_by_the_truth(tmp_path: Path) -> None:
+    """A prompt that stays put runs on any hardware: the truth judges it, the controller's view stands beside it."""
+    report_path = tmp_path / "plan.json"
+    result = g1ctl("plan", "wave with your right hand", "--hardware", "sim-can", "--report", str(report_path))
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["falls"] == 0 and report["measured_by"] == "truth" and report["run"]["hw"]["faults"] == 0
+    (wave,) = report["clauses"]
+    assert wave["gestures"] == ["wave_right"] and not wave["timed_out"] and report["order_accuracy"] == 1.0
+    assert abs(wave["displacement"][0]) < 0.1 and abs(wave["displacement"][1]) < 0.1
+    if wave["displacement_estimate"] is not None:  # a state estimator stands behind the controller's view
+        assert wave["displacement_estimate"] == pytest.approx(wave["displacement"], abs=0.05)
+    assert wave["heading_change_deg_estimate"] == pytest.approx(wave["heading_change_deg"], abs=2.0)  # the IMU's heading
+
+
+@pytest.mark.slow
+def test_a_plan_that_walks_on_hardware_needs_a_base_position(tmp_path: Path) -> None:
+    """Where the controller's state has no base position the walk is refused at its start, in one line; where an estimator
+    gives one it runs, judged by the truth."""
+    report_path = tmp_path / "plan.json"
+    result = g1ctl("plan", "walk forward half a meter", "--hardware", "sim-can", "--report", str(report_path))
+    if result.returncode != 0:
+        line = one_line_error(result, code=1)
+        assert line.startswith("g1ctl: fault: run aborted after 0.0 s: the text plan moves the base ('walk forward 0.5 meter')")
+        assert "no base position estimate" in line and "--sim" in line
+        return
+    report = json.loads(report_path.read_text())
+    assert report["measured_by"] == "truth" and report["total_displacement"][0] == pytest.approx(0.5, abs=0.15)
+    assert report["total_displacement_estimate"] is not None
 
 
 @pytest.mark.parametrize("prompt", ["do a backflip", "walk forward 500 meters"])
@@ -41,6 +82,23 @@ def test_requests_the_stack_cannot_do_are_refused_in_one_line(prompt: str) -> No
 
 def test_video_needs_a_simulated_run() -> None:
     assert "--sim" in one_line_error(g1ctl("plan", "wave", "--video", "x.mp4"))
+
+
+def test_sim_and_hardware_are_two_ways_to_run_choose_one() -> None:
+    line = one_line_error(g1ctl("plan", "wave", "--sim", "--hardware", "sim-can"))
+    assert "--sim and --hardware" in line and "choose one" in line
+
+
+def test_an_unknown_hardware_is_named_with_the_valid_ones() -> None:
+    line = one_line_error(g1ctl("plan", "wave", "--hardware", "sim-cna"))
+    assert "'sim-cna'" in line and "sim-can" in line
+
+
+@pytest.mark.skipif(importlib.util.find_spec("cyclonedds") is None, reason="the g1 extra (cyclonedds) is not installed")
+@pytest.mark.parametrize(("option", "value"), [("--video", "x.mp4"), ("--progress", None)])
+def test_a_real_robot_refuses_what_needs_the_simulator(option: str, value: str | None) -> None:
+    line = one_line_error(g1ctl("plan", "wave", "--hardware", "g1-dds", option, *([value] if value else [])))
+    assert line.startswith(f"g1ctl: error: {option}: not on a real robot")
 
 
 @pytest.mark.slow

@@ -17,18 +17,7 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
 
-from hw.shipped import config_dir
-from tests.conftest import g1ctl, one_line_error
-
-
-def a_robot_config(tmp_path: Path, domain: int) -> Path:
-    text = (config_dir("hardware") / "g1-dds.yaml").read_text()
-    assert "dds: {domain: 0, interface: eth0, peers: []," in text
-    path = tmp_path / "my-g1.yaml"
-    text = text.replace("dds: {domain: 0, interface: eth0, peers: [],", f"dds: {{domain: {domain}, interface: lo, peers: [127.0.0.1],")
-    # The stand-in robot starts standing in the default pose, off any gantry: a 3 s ramp under PD alone would tip it over.
-    path.write_text(text.replace("soft_start_time: 3.0", "soft_start_time: 0.2"))
-    return path
+from tests.conftest import a_robot_config, g1ctl, one_line_error
 
 
 @pytest.mark.slow

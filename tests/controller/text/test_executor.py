@@ -60,9 +60,11 @@ def test_clauses_run_in_order_and_reach_their_goals(planner: Planner) -> None:
     assert [r.index for r in records] == [0, 1, 2] and reference.finished_at is not None
     assert all(r.end_s is not None and not r.timed_out for r in records)
     assert [records[i].end_s == records[i + 1].start_s for i in range(2)] == [True, True]
-    forward, left = records[0].displacement
+    displacement = records[0].estimate.displacement
+    assert displacement is not None
+    forward, left = displacement
     assert forward == pytest.approx(1.0, abs=0.08) and abs(left) < 0.08  # the follower's tolerance
-    assert math.degrees(records[1].heading_change) == pytest.approx(90.0, abs=12.0)
+    assert math.degrees(records[1].estimate.heading_change) == pytest.approx(90.0, abs=12.0)
     assert records[2].end_s - records[2].start_s >= 2.0 - 1e-6  # the wave's minimum duration
     assert reference.caption == "done"
 
