@@ -62,7 +62,6 @@ CASES = (
 )
 
 
-
 def select_cases(hardware: Sequence[str], names: Sequence[str] | None) -> list[tuple[Case, str]]:
     """(case, hardware) pairs to run: `sim` is the simulator directly with `--estimator`; unknown names are refused."""
     known = {case.name: case for case in CASES}
@@ -120,9 +119,15 @@ def run_case(case: Case, hardware: str, seed: int, assets_dir: str | None) -> di
     else:
         errors = report.get("waypoint_errors", [])
         wire = report.get("hw", {}).get("wire", {})
-        result |= {"waypoint_errors": errors, "waypoint_time_s": report.get("waypoint_time_s"), "outside_limits": wire.get("outside_limits")}
+        result |= {
+            "waypoint_errors": errors,
+            "waypoint_time_s": report.get("waypoint_time_s"),
+            "outside_limits": wire.get("outside_limits"),
+        }
         reached = len(errors) > 0 and report.get("waypoints_reached") == len(errors) and report.get("waypoint_time_s") is not None
-        on_target = reached and all(e["position_m"] <= MAX_WAYPOINT_POSITION_M and e["heading_deg"] <= MAX_WAYPOINT_HEADING_DEG for e in errors)
+        on_target = reached and all(
+            e["position_m"] <= MAX_WAYPOINT_POSITION_M and e["heading_deg"] <= MAX_WAYPOINT_HEADING_DEG for e in errors
+        )
         held = bool(report.get("hold_reason")) and report["final_mode"] == "stand"
         checks |= {"no_wild_command": wire.get("outside_limits", 0) == 0, "reached_or_held": on_target or held}
     result["checks"] = checks

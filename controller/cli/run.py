@@ -43,7 +43,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--report", type=Path, default=None, help="write the JSON report here (and a .png plot beside it)")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument(
-        "--estimator", action="store_true", help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)"
+        "--estimator",
+        action="store_true",
+        help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)",
     )
     run.add_argument("--estimator-config", default=None, help="the state estimator's YAML (default: configs/estimator.yaml)")
     run.add_argument("--rt-priority", type=int, default=0, help="on a real G1: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")

@@ -30,7 +30,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim.add_argument("--duration", type=float, default=None, help="seconds of simulated time (default: the scenario's)")
     sim.add_argument("--seed", type=int, default=0)
     sim.add_argument(
-        "--estimator", action="store_true", help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)"
+        "--estimator",
+        action="store_true",
+        help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)",
     )
     sim.add_argument("--estimator-config", default=None, help="the state estimator's YAML (default: configs/estimator.yaml)")
     sim.add_argument("--input", default="scripted", choices=INPUTS)
@@ -65,7 +67,8 @@ def run(args: argparse.Namespace) -> int:
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
-        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config, perturbations=load_perturbations(args.perturb, args.seed) if args.perturb else None,
+        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config,
+        perturbations=load_perturbations(args.perturb, args.seed) if args.perturb else None,
     )  # fmt: skip
     return run_and_summarize(cfg)
 

@@ -254,6 +254,7 @@ class WaypointReference(ReferenceSource):
     """
 
     needs_base_position = True
+    follower: WaypointFollower
 
     def __init__(self, follower: WaypointFollower) -> None:
         self.follower = follower

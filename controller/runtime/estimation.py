@@ -20,8 +20,8 @@ import numpy as np
 from controller.estimation.estimator import StateEstimator
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
-from hw.errors import ConfigError
 from hw import quat
+from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import JointCommand, RobotState
 
@@ -94,7 +94,9 @@ class EstimateJudge:
         self._times: list[float] = []  # the controller's time of each sample ...
         self._truth_poses: list[tuple[float, float, float]] = []  # ... and the truth's pose then: x, y (m), heading (rad)
 
-    def record(self, estimate: RobotState, truth: RobotState, estimated_contacts: tuple[bool, bool], true_contacts: tuple[bool, bool] | None) -> None:
+    def record(
+        self, estimate: RobotState, truth: RobotState, estimated_contacts: tuple[bool, bool], true_contacts: tuple[bool, bool] | None
+    ) -> None:
         truth_xy, estimate_xy = truth.base_pos[:2].copy(), estimate.base_pos[:2].copy()
         truth_yaw, estimate_yaw = float(quat.heading(truth.base_quat)), float(quat.heading(estimate.base_quat))
         if self._origin is None:
@@ -134,7 +136,6 @@ class EstimateJudge:
             "contact_decisions": self.contact_decisions,
             "contact_disagreements": self.contact_disagreements,
         }
-
 
     def waypoint_errors(self, settled: Sequence[WaypointError]) -> list[dict[str, float]]:
         """Each waypoint's error when the controller settled on it, as the truth had the robot then."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from hw.protocols import imu, mit
@@ -59,9 +60,9 @@ def test_mit_basic_reply() -> None:
     # id 3; p 0x8000; v 0x800; t 0x7ff
     reply = mit.decode_reply(AK80_9, "basic", bytes.fromhex("0380008007ff"))
     assert reply.motor_id == 3
-    assert reply.position == pytest.approx(32768 * 25 / 65535 - 12.5)
-    assert reply.velocity == pytest.approx(0.0122, abs=1e-3)
-    assert reply.torque == pytest.approx(-0.0044, abs=1e-3)
+    assert reply.position == pytest.approx(32768.5 * 25 / 65535 - 12.5)  # the middle of the step
+    assert reply.velocity == pytest.approx(0.0122 + 0.0122, abs=1e-3)  # 0x800 spans 0.012 to 0.037 rad/s
+    assert reply.torque == pytest.approx(-0.0044 + 0.0044, abs=1e-3)
     assert reply.error == "ok"
 
 
@@ -187,10 +188,20 @@ def test_batch_mit_encode_matches_the_scalar_function() -> None:
         assert batch[i].tobytes() == scalar
 
 
-def test_reply_values_are_uint_to_float_exactly() -> None:
+def test_reply_values_are_the_middle_of_the_truncated_step() -> None:
     frame = mit.encode_reply(AK80_9, "cubemars", 5, 1.2345, -7.5, 3.3)
     reply = mit.decode_reply(AK80_9, "cubemars", frame)
     p, v, t = (frame[1] << 8) | frame[2], (frame[3] << 4) | (frame[4] >> 4), ((frame[4] & 0xF) << 8) | frame[5]
-    assert reply.position == mit.uint_to_float(p, -12.5, 12.5, 16)
-    assert reply.velocity == mit.uint_to_float(v, -50.0, 50.0, 12)
-    assert reply.torque == mit.uint_to_float(t, -18.0, 18.0, 12)
+    assert reply.position == pytest.approx(mit.uint_to_float(p, -12.5, 12.5, 16) + 0.5 * 25 / 65535, abs=1e-12)
+    assert reply.velocity == pytest.approx(mit.uint_to_float(v, -50.0, 50.0, 12) + 0.5 * 100 / 4095, abs=1e-12)
+    assert reply.torque == pytest.approx(mit.uint_to_float(t, -18.0, 18.0, 12) + 0.5 * 36 / 4095, abs=1e-12)
+
+
+def test_reply_velocities_are_unbiased() -> None:
+    """The firmware truncates: read at the lower edge, every velocity is half a step low on average; at the middle, not."""
+    rng = np.random.default_rng(0)
+    velocities = rng.uniform(-3.0, 3.0, 4000)
+    read = np.array([mit.decode_reply(AK80_9, "basic", mit.encode_reply(AK80_9, "basic", 1, 0.0, v, 0.0)).velocity for v in velocities])
+    step = 100 / 4095
+    assert abs(float(np.mean(read - velocities))) < 0.05 * step
+    assert np.max(np.abs(read - velocities)) <= 0.5 * step + 1e-12
