@@ -3,7 +3,7 @@
 Heights are along gravity, relative to the base (the contact points rotated by the IMU's attitude),
 so no ground height is needed. A walking G1 always has a foot down, so the lower foot is always in
 contact; the other one joins it within `height_margin` and leaves it above `height_margin +
-hysteresis`. Measured against the simulator's contacts in controller/estimation/README.md, beside
+hysteresis`. Measured against the simulator's contacts in docs/estimation.md, beside
 a contact decision from the joint torques.
 """
 

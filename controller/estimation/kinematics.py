@@ -25,7 +25,7 @@ LEG_JOINTS = ("hip_pitch_joint", "hip_roll_joint", "hip_yaw_joint", "knee_joint"
 FOOT_BODY = "ankle_roll_link"
 # The contact point in the ankle-roll link's frame: under its origin, at the sole. The foot's
 # collision capsules lie 0.025 m below the origin with a 0.01 m radius; the sole point drifts less
-# than the ankle's origin when the foot rolls (figures in controller/estimation/README.md).
+# than the ankle's origin when the foot rolls (figures in docs/estimation.md).
 SOLE_OFFSET = (0.0, 0.0, -0.035)
 
 

@@ -40,6 +40,9 @@ def test_run_drives_a_robot_that_answers_on_the_configs_domain(tmp_path: Path, c
     hw = report["hw"]
     # 500 Hz for 4 s is 2000 cycles; a loaded machine takes fewer (1344 commands beside another test run): half
     assert hw["released_mode"] == "ai" and hw["faults"] == 0 and hw["cycles"] > 1000 and hw["crc_errors"] == 0
+    # no truth on a robot: the state estimator ran at the tracker's rate, and the figures are its
+    assert report["measured_by"] == "estimate" and report["estimator"]["fault"] is None and "judged_by" not in report["estimator"]
+    assert report["estimator"]["rate_hz"] > 40.0 and report["velocity_error_mean"] < 0.3  # 50 Hz, less on a loaded machine
     counters = json.loads(out.strip().splitlines()[-1])
     assert robot.returncode == 0, err
     assert counters["commands"] > 1000 and counters["motion_mode"] == "" and counters["damping_commands"] >= 1
