@@ -37,20 +37,26 @@ def predict(x: Rows, p: Rows, dt: float, accel: Sequence[float], q: Sequence[flo
 
 def correct(x: Rows, p: Rows, row: int, minus: int | None, z: Sequence[float], r: float) -> None:
     """Correct with the measurement z = x[row] - x[minus] (x[row] where `minus` is None) + noise of variance `r`, in place:
-    K = P h / s with s = h P h + r; x' = x + K (z - h x); P' = P - K (P h)^T."""
+    K = P h / s with s = h P h + r; x' = x + K (z - h x); P' = P - (P h)(P h)^T / s."""
+    measured = x[row]
     if minus is None:
         ph = [p_i[row] for p_i in p]
         s = ph[row] + r
-        innovation = [z[axis] - x[row][axis] for axis in range(3)]
+        e0, e1, e2 = z[0] - measured[0], z[1] - measured[1], z[2] - measured[2]
     else:
+        base = x[minus]
         ph = [p_i[row] - p_i[minus] for p_i in p]
         s = ph[row] - ph[minus] + r
-        innovation = [z[axis] - (x[row][axis] - x[minus][axis]) for axis in range(3)]
-    for i in range(4):
-        gain = ph[i] / s
-        x_i, p_i = x[i], p[i]
-        for axis in range(3):
-            x_i[axis] += gain * innovation[axis]
-        for j in range(i, 4):
-            p_i[j] -= gain * ph[j]
-            p[j][i] = p_i[j]
+        e0, e1, e2 = z[0] - (measured[0] - base[0]), z[1] - (measured[1] - base[1]), z[2] - (measured[2] - base[2])
+    inverse = 1.0 / s
+    ph0, ph1, ph2, ph3 = ph
+    for x_i, p_i, ph_i in zip(x, p, ph, strict=True):
+        gain = ph_i * inverse
+        x_i[0] += gain * e0
+        x_i[1] += gain * e1
+        x_i[2] += gain * e2
+        # ph_i ph_j / s, multiplied in this order, is the same float as ph_j ph_i / s: P stays exactly symmetric
+        p_i[0] -= ph_i * ph0 * inverse
+        p_i[1] -= ph_i * ph1 * inverse
+        p_i[2] -= ph_i * ph2 * inverse
+        p_i[3] -= ph_i * ph3 * inverse

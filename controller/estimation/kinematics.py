@@ -185,6 +185,17 @@ class LegKinematics:
         self._after = frames[:6]
         self.foot_pos = frames[6, :, :3, 3]  # (2, 3), a view
         self.foot_vel = np.zeros((2, 3))
+        # The views each update works on, made once: a view costs about as much as a small numpy call.
+        self._sin, self._cos = self._coef[:, :, 0, 1], self._coef[:, :, 0, 2]
+        self._scan_steps = [
+            (self._scan[step, _SCAN_PAD - (1 << step) : -(1 << step)], self._scan[step, _SCAN_PAD:], self._scan[step + 1, _SCAN_PAD:])
+            for step in range(3)
+        ]
+        self._axes_column = self._axes[..., :3, :]
+        self._lever_row = self._lever[..., None, :]
+        self._outer_flat = self._outer.reshape(6, 2, 9)
+        self._columns_by_leg = np.swapaxes(self._columns, 0, 1)  # (2, 6, 3)
+        self._foot_vel_row = self.foot_vel[:, None, :]
 
     @classmethod
     def from_mjcf(cls, mjcf: Path, contact_offset: tuple[float, float, float] = SOLE_OFFSET) -> LegKinematics:
@@ -202,19 +213,18 @@ class LegKinematics:
 
     def update(self, q: FloatArray, dq: FloatArray) -> None:
         """Forward kinematics and Jacobians of both legs at joint angles `q` (12), velocities from rates `dq` (12)."""
-        angles, coef, scan = q.reshape(2, 6).T, self._coef, self._scan
-        np.sin(angles, out=coef[:, :, 0, 1])
-        np.cos(angles, out=coef[:, :, 0, 2])
-        np.matmul(coef, self._basis, out=self._local)
-        for step in range(3):
-            offset = 1 << step
-            np.matmul(scan[step, _SCAN_PAD - offset : -offset], scan[step, _SCAN_PAD:], out=scan[step + 1, _SCAN_PAD:])
+        angles = q.reshape(2, 6).T
+        np.sin(angles, out=self._sin)
+        np.cos(angles, out=self._cos)
+        np.matmul(self._coef, self._basis, out=self._local)
+        for parents, bodies, out in self._scan_steps:
+            np.matmul(parents, bodies, out=out)
         np.matmul(self._after, self._axis, out=self._axes)
         np.subtract(self.foot_pos, self._hinges, out=self._lever)
         # axis x lever: the outer product of the two contracted with the permutation symbol.
-        np.multiply(self._axes[..., :3, :], self._lever[..., None, :], out=self._outer)
-        np.matmul(self._outer.reshape(6, 2, 9), _LEVI_CIVITA, out=self._columns)
-        np.matmul(dq.reshape(2, 1, 6), np.swapaxes(self._columns, 0, 1), out=self.foot_vel[:, None, :])
+        np.multiply(self._axes_column, self._lever_row, out=self._outer)
+        np.matmul(self._outer_flat, _LEVI_CIVITA, out=self._columns)
+        np.matmul(dq.reshape(2, 1, 6), self._columns_by_leg, out=self._foot_vel_row)
 
 
 _SCAN_PAD = 4  # identities before the chain's seven transforms: the scan's largest step
