@@ -137,9 +137,11 @@ class LegKinematics:
     """Both legs at once: foot contact points in the pelvis frame, their velocities and Jacobians.
 
     `update(q, dq)` takes the 12 leg joints (left hip pitch .. ankle roll, then right) and fills
-    `foot_pos` (2, 3), `foot_vel` (2, 3) (J dq), `jac_pos` and `jac_rot` (2, 3, 6). The chain is
-    evaluated for all twelve hinges at once (one batched Rodrigues formula, six matrix products
-    down each leg): numpy's cost is per call, not per number.
+    `foot_pos` (2, 3) and `foot_vel` (2, 3) (J dq); `jac_pos` and `jac_rot` (2, 3, 6) are views of
+    the last update's Jacobians. numpy's cost is per call, not per number, so both legs go through
+    a dozen batched calls: every body's homogeneous transform in its parent in one product
+    (Rodrigues, its terms precomputed), the transforms down the chains in three (a prefix scan),
+    then the hinge axes, the levers and the Jacobian columns.
     """
 
     def __init__(self, chains: tuple[LegChain, LegChain], contact_offset: tuple[float, float, float] = SOLE_OFFSET) -> None:
@@ -149,51 +151,84 @@ class LegKinematics:
         self.chains = chains
         self.joint_names: tuple[str, ...] = chains[0].joints + chains[1].joints
         self.contact_offset = np.asarray(contact_offset, dtype=np.float64)
-        body_rot = np.stack([c.body_rot for c in chains])  # (2, 6, 3, 3)
-        axis = np.stack([c.joint_axis for c in chains])  # (2, 6, 3)
-        skew = np.zeros((2, 6, 3, 3))
+        # Arrays are (body, leg, ...): slices along the chain stay contiguous.
+        body_rot = np.stack([c.body_rot for c in chains], axis=1)  # (6, 2, 3, 3)
+        axis = np.stack([c.joint_axis for c in chains], axis=1)  # (6, 2, 3)
+        skew = np.zeros((6, 2, 3, 3))
         skew[..., 0, 1], skew[..., 0, 2], skew[..., 1, 2] = -axis[..., 2], axis[..., 1], -axis[..., 0]
         skew -= np.swapaxes(skew, -1, -2)
-        # Each body's rotation in its parent at hinge angle q is Rb (I + sin q K + (1 - cos q) K^2) (Rodrigues):
-        # the row (1, sin q, 1 - cos q) times the three matrices, flattened, is one batched product.
-        self._basis = np.stack([body_rot, body_rot @ skew, body_rot @ skew @ skew], axis=2).reshape(2, 6, 3, 9)
-        self._coef = np.ones((2, 6, 1, 3))
-        self._local = np.zeros((2, 6, 1, 9))
-        self._body_pos = np.stack([c.body_pos for c in chains])[..., None]  # (2, 6, 3, 1)
-        self._axis_in_parent = body_rot @ axis[..., None]  # (2, 6, 3, 1): the hinge axis in the parent's frame
-        self._frames = np.zeros((2, 7, 3, 3))  # cumulative rotations: the pelvis, then each body after its hinge
-        self._frames[:, 0] = np.eye(3)
-        self.foot_pos = np.zeros((2, 3))
+        # A body's transform in its parent at hinge angle q is [Rb (I + sin q K + (1 - cos q) K^2), pb; 0 0 0 1]
+        # (Rodrigues, the hinge at the body's origin): the row (1, sin q, cos q) times three 4x4 matrices.
+        basis = np.zeros((6, 2, 3, 4, 4))
+        basis[:, :, 0, :3, :3] = body_rot + body_rot @ skew @ skew
+        basis[:, :, 0, :3, 3] = np.stack([c.body_pos for c in chains], axis=1)
+        basis[:, :, 0, 3, 3] = 1.0
+        basis[:, :, 1, :3, :3] = body_rot @ skew
+        basis[:, :, 2, :3, :3] = -body_rot @ skew @ skew
+        self._basis = basis.reshape(6, 2, 3, 16)
+        self._coef = np.ones((6, 2, 1, 3))
+        # The prefix scan (Hillis-Steele): _SCAN_PAD identities, then the six hinged bodies' transforms and the
+        # contact point's (a translation in the ankle-roll link); three products of each entry with the one
+        # 1, 2, 4 places up leave every entry the transform from the pelvis to it.
+        self._scan = np.zeros((4, _SCAN_PAD + 7, 2, 4, 4))
+        self._scan[...] = np.eye(4)
+        self._scan[0, -1, :, :3, 3] = self.contact_offset
+        self._local = self._scan[0, _SCAN_PAD : _SCAN_PAD + 6].reshape(6, 2, 1, 16)
+        self._axis = np.zeros((6, 2, 4, 1))  # each hinge's axis in its body's frame (a direction: no translation)
+        self._axis[:, :, :3, 0] = axis
+        self._axes = np.zeros((6, 2, 4, 1))  # each hinge's axis in the pelvis frame
+        self._lever = np.zeros((6, 2, 3))  # from each hinge to the foot
+        self._outer = np.zeros((6, 2, 3, 3))
+        self._columns = np.zeros((6, 2, 3))  # each hinge's column of the position Jacobian: axis x lever
+        frames = self._scan[-1, _SCAN_PAD:]  # (7, 2, 4, 4): each body after its hinge, then the contact point
+        self._hinges = frames[:6, :, :3, 3]  # a body's origin is its hinge
+        self._after = frames[:6]
+        self.foot_pos = frames[6, :, :3, 3]  # (2, 3), a view
         self.foot_vel = np.zeros((2, 3))
-        self.jac_pos = np.zeros((2, 3, 6))
-        self.jac_rot = np.zeros((2, 3, 6))
+        # The views each update works on, made once: a view costs about as much as a small numpy call.
+        self._sin, self._cos = self._coef[:, :, 0, 1], self._coef[:, :, 0, 2]
+        self._scan_steps = [
+            (self._scan[step, _SCAN_PAD - (1 << step) : -(1 << step)], self._scan[step, _SCAN_PAD:], self._scan[step + 1, _SCAN_PAD:])
+            for step in range(3)
+        ]
+        self._axes_column = self._axes[..., :3, :]
+        self._lever_row = self._lever[..., None, :]
+        self._outer_flat = self._outer.reshape(6, 2, 9)
+        self._columns_by_leg = np.swapaxes(self._columns, 0, 1)  # (2, 6, 3)
+        self._foot_vel_row = self.foot_vel[:, None, :]
 
     @classmethod
     def from_mjcf(cls, mjcf: Path, contact_offset: tuple[float, float, float] = SOLE_OFFSET) -> LegKinematics:
         return cls(read_leg_chains(mjcf), contact_offset)
 
+    @property
+    def jac_pos(self) -> FloatArray:
+        """(2, 3, 6): d foot_pos / d q per leg (a view of the last update)."""
+        return np.transpose(self._columns, (1, 2, 0))
+
+    @property
+    def jac_rot(self) -> FloatArray:
+        """(2, 3, 6): the foot's angular velocity per unit joint rate, per leg (a view of the last update)."""
+        return np.transpose(self._axes[:, :, :3, 0], (1, 2, 0))
+
     def update(self, q: FloatArray, dq: FloatArray) -> None:
         """Forward kinematics and Jacobians of both legs at joint angles `q` (12), velocities from rates `dq` (12)."""
-        angles = q.reshape(2, 6)
-        coef, frames = self._coef, self._frames
-        np.sin(angles, out=coef[:, :, 0, 1])
-        np.cos(angles, out=coef[:, :, 0, 2])
-        np.subtract(1.0, coef[:, :, 0, 2], out=coef[:, :, 0, 2])
-        local = np.matmul(coef, self._basis, out=self._local).reshape(2, 6, 3, 3)
-        for i in range(6):
-            np.matmul(frames[:, i], local[:, i], out=frames[:, i + 1])
-        before = frames[:, :6]  # each body's parent frame, in the pelvis frame
-        hinges = np.cumsum(before @ self._body_pos, axis=1)[..., 0]  # (2, 6, 3): each hinge's position
-        axes = (before @ self._axis_in_parent)[..., 0]  # (2, 6, 3): each hinge's axis
-        foot = hinges[:, 5] + frames[:, 6] @ self.contact_offset
-        columns = _cross(axes, foot[:, None, :] - hinges)  # (2, 6, 3): each hinge's column of the position Jacobian
-        self.foot_pos[:] = foot
-        self.jac_rot[:] = np.swapaxes(axes, 1, 2)
-        self.jac_pos[:] = np.swapaxes(columns, 1, 2)
-        np.matmul(dq.reshape(2, 1, 6), columns, out=self.foot_vel[:, None, :])
+        angles = q.reshape(2, 6).T
+        np.sin(angles, out=self._sin)
+        np.cos(angles, out=self._cos)
+        np.matmul(self._coef, self._basis, out=self._local)
+        for parents, bodies, out in self._scan_steps:
+            np.matmul(parents, bodies, out=out)
+        np.matmul(self._after, self._axis, out=self._axes)
+        np.subtract(self.foot_pos, self._hinges, out=self._lever)
+        # axis x lever: the outer product of the two contracted with the permutation symbol.
+        np.multiply(self._axes_column, self._lever_row, out=self._outer)
+        np.matmul(self._outer_flat, _LEVI_CIVITA, out=self._columns)
+        np.matmul(dq.reshape(2, 1, 6), self._columns_by_leg, out=self._foot_vel_row)
 
 
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """a x b over the last axis; several times cheaper than `np.cross` on small arrays."""
-    a2, b2 = np.concatenate((a, a), axis=-1), np.concatenate((b, b), axis=-1)
-    return a2[..., 1:4] * b2[..., 2:5] - a2[..., 2:5] * b2[..., 1:4]
+_SCAN_PAD = 4  # identities before the chain's seven transforms: the scan's largest step
+# (a x b)_k = sum_ij eps_ijk a_i b_j: the permutation symbol, row i * 3 + j, column k.
+_LEVI_CIVITA = np.array(
+    [[0, 0, 0], [0, 0, 1], [0, -1, 0], [0, 0, -1], [0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, 0, 0]], dtype=np.float64
+)

@@ -1,15 +1,18 @@
-"""The Kalman filter's steps against the textbook equations, written plainly, and a 1-D closed form."""
+"""The estimator's Kalman filter against the textbook equations, written plainly in numpy, and a 1-D closed form."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from controller.estimation.filter import predict, update
+from controller.estimation.filter import correct, predict
+
+# The estimator's measurements, as (row, minus): left foot - base, right foot - base, base velocity twice.
+MEASUREMENTS = ((2, 0), (3, 0), (1, None), (1, None))
 
 
-def textbook(x, p, f, q, h, r, z):  # type: ignore[no-untyped-def]
-    """Predict then correct, with an explicit inverse and the Joseph form of the covariance."""
-    x, p = f @ x, f @ p @ f.T + q
+def textbook(x, p, f, q, b, h, r, z):  # type: ignore[no-untyped-def]
+    """Predict then correct all measurements at once, with an explicit inverse and the Joseph form of the covariance."""
+    x, p = f @ x + b, f @ p @ f.T + q
     k = p @ h.T @ np.linalg.inv(h @ p @ h.T + r)
     i_kh = np.eye(len(x)) - k @ h
     return x + k @ (z - h @ x), i_kh @ p @ i_kh.T + k @ r @ k.T
@@ -17,30 +20,41 @@ def textbook(x, p, f, q, h, r, z):  # type: ignore[no-untyped-def]
 
 def test_one_step_matches_the_textbook_equations_column_by_column() -> None:
     rng = np.random.default_rng(3)
-    n, m, k = 4, 5, 3
-    a = rng.normal(size=(n, n))
-    p = a @ a.T + np.eye(n)
-    f, h = np.eye(n) + 0.1 * rng.normal(size=(n, n)), rng.normal(size=(m, n))
-    q, r = np.diag(rng.uniform(0.1, 1, n)), np.diag(rng.uniform(0.1, 1, m))
-    x, z = rng.normal(size=(n, k)), rng.normal(size=(m, k))
-    x_pred, p_pred = predict(x, p, f, q)
-    x_new, p_new, innovation = update(x_pred, p_pred, h, r, z)
-    for column in range(k):  # every column is its own filter sharing the covariance
-        want_x, want_p = textbook(x[:, column], p, f, q, h, r, z[:, column])
-        np.testing.assert_allclose(x_new[:, column], want_x, atol=1e-12)
-        np.testing.assert_allclose(p_new, want_p, atol=1e-12)
-    np.testing.assert_allclose(innovation, z - h @ (f @ x), atol=1e-12)
+    dt = 0.02
+    for _ in range(20):
+        a = rng.normal(size=(4, 4))
+        p = a @ a.T + 0.1 * np.eye(4)
+        x, z, accel = rng.normal(size=(4, 3)), rng.normal(size=(4, 3)), rng.normal(size=3)
+        q, r = rng.uniform(0.01, 1.0, 4), rng.uniform(0.01, 1.0, 4)
+        x_new, p_new = x.tolist(), p.tolist()
+        predict(x_new, p_new, dt, accel.tolist(), q.tolist())
+        for (row, minus), z_row, r_row in zip(MEASUREMENTS, z.tolist(), r.tolist(), strict=True):
+            correct(x_new, p_new, row, minus, z_row, r_row)
+        f = np.eye(4)
+        f[0, 1] = dt
+        h = np.zeros((4, 4))
+        for i, (row, minus) in enumerate(MEASUREMENTS):
+            h[i, row] = 1.0
+            if minus is not None:
+                h[i, minus] = -1.0
+        b = np.outer([0.5 * dt * dt, dt, 0.0, 0.0], accel)
+        for column in range(3):  # every column is its own filter sharing the covariance
+            want_x, want_p = textbook(x[:, column], p, f, np.diag(q), b[:, column], h, np.diag(r), z[:, column])
+            np.testing.assert_allclose(np.array(x_new)[:, column], want_x, atol=1e-12)
+            np.testing.assert_allclose(p_new, want_p, atol=1e-12)
+        np.testing.assert_array_equal(p_new, np.array(p_new).T)  # exactly symmetric
 
 
 def test_a_control_input_adds_to_the_prediction() -> None:
-    f = np.array([[1.0, 0.1], [0.0, 1.0]])
-    x, u = np.array([[1.0], [2.0]]), np.array([[0.005], [0.1]])
-    x_pred, _ = predict(x, np.eye(2), f, np.zeros((2, 2)), u)
-    np.testing.assert_allclose(x_pred, [[1.205], [2.1]])
+    x = [[1.0] * 3, [2.0] * 3, [0.0] * 3, [0.0] * 3]
+    predict(x, np.eye(4).tolist(), 0.1, [1.0, 0.0, -1.0], [0.0] * 4)
+    np.testing.assert_allclose(x[:2], [[1.205, 1.2, 1.195], [2.1, 2.0, 1.9]])
 
 
 def test_a_scalar_measurement_weights_by_the_variances() -> None:
     """x ~ N(0, 4) measured as 3 with variance 1: the posterior is 3 * 4 / 5 with variance 4 * 1 / 5."""
-    x, p, _ = update(np.zeros(1), np.array([[4.0]]), np.eye(1), np.eye(1), np.array([3.0]))
-    np.testing.assert_allclose(x, [2.4])
-    np.testing.assert_allclose(p, [[0.8]])
+    x = [[0.0] * 3 for _ in range(4)]
+    p = np.diag([1.0, 4.0, 1.0, 1.0]).tolist()
+    correct(x, p, 1, None, [3.0, 3.0, 3.0], 1.0)
+    np.testing.assert_allclose(x[1], [2.4] * 3)
+    np.testing.assert_allclose(p[1][1], 0.8)
