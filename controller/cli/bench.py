@@ -8,6 +8,7 @@ g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--len
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
 g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--no-text]
+                 [--hardware sim-can]
 """
 
 from __future__ import annotations
@@ -71,6 +72,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
     text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-naive comparison on the composed plans")
     text.add_argument("--no-text", action="store_true", help="leave the planner's text slot empty (default: each clause's text)")
+    text.add_argument("--hardware", default=None, help="run each prompt through simulated hardware (sim-can, sim-dds): the estimate steers")
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
     caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
@@ -127,15 +129,20 @@ def _text(args: argparse.Namespace) -> int:
     from controller.bench.text import TextBenchConfig, run_text_bench  # noqa: PLC0415
     from controller.text.service import TextPlanner  # noqa: PLC0415
 
+    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+
+    if args.hardware is not None and is_real_robot(args.hardware):
+        raise ConfigError(f"bench text --hardware {args.hardware}: a real robot; the suite runs on simulated hardware (sim-can, sim-dds)")
     cfg = TextBenchConfig(suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic)
     planner = TextPlanner.load(condition_text=not args.no_text)
     report = run_text_bench(
         cfg,
         planner.resolve,
-        lambda program: planner.simulate(program, seed=args.seed, policy=args.policy),
+        lambda program: planner.simulate(program, seed=args.seed, policy=args.policy, hardware=args.hardware),
         lambda program, blend: planner.composed_transition(program, blend, args.seed),
         progress=lambda line: print(line, file=sys.stderr, flush=True),
     )
+    report["hardware"] = args.hardware  # None: the simulator directly
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
     _save(report, args.report)
     return 0

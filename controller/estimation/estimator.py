@@ -115,6 +115,8 @@ class StateEstimator:
         if not first and not dt > 0.0:
             if not math.isfinite(dt):
                 self._fault = "non-finite input: time"
+            elif (bad := _first_nonfinite(state, self._legs)) is not None:
+                self._fault = f"non-finite input: {bad}"  # a repeated time stamp carries no news, but a NaN is still a fault
             return  # the same reading again: nothing new to fuse
 
         w, x, y, z = state.base_quat.tolist()
@@ -140,7 +142,7 @@ class StateEstimator:
         accel = _rotated(rot, state.imu_accel.tolist())
         accel[2] -= self.config.gravity
         if not math.isfinite(sum(feet[0]) + sum(feet[1]) + sum(base_velocity[0]) + sum(base_velocity[1]) + sum(accel)):
-            self._fault = f"non-finite input: {_first_nonfinite(state, self._legs)}"
+            self._fault = f"non-finite input: {_first_nonfinite(state, self._legs) or 'the base attitude'}"
             return
         self._time = state.time
         left, right = feet[0][2], feet[1][2]
@@ -209,11 +211,11 @@ class StateEstimator:
         return dataclasses.replace(state, base_pos=np.array(pos), base_lin_vel=np.array(vel), base_quat=attitude, has_base_position=True)
 
 
-def _first_nonfinite(state: RobotState, legs: FloatArray) -> str:
-    """The first field of `state` the estimator reads that holds a NaN or an infinity."""
+def _first_nonfinite(state: RobotState, legs: FloatArray) -> str | None:
+    """The first field of `state` the estimator reads that holds a NaN or an infinity; None when all are finite."""
     fields = {"joint_pos (legs)": state.joint_pos[legs], "joint_vel (legs)": state.joint_vel[legs], "base_quat": state.base_quat}
     fields |= {"base_ang_vel": state.base_ang_vel, "imu_accel": state.imu_accel}
-    return next((name for name, values in fields.items() if not np.isfinite(values).all()), "the base attitude")
+    return next((name for name, values in fields.items() if not np.isfinite(values).all()), None)
 
 
 def _rotated(rot: tuple[tuple[float, float, float], ...], v: Sequence[float]) -> list[float]:

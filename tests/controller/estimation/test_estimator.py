@@ -34,7 +34,8 @@ def walk() -> tuple[tuple[str, ...], list[Row]]:
 
         def recording_read() -> RobotState:
             state = read()
-            rows.append((state, SimRobot.read(built.robot), built.robot.foot_contacts()))
+            if not rows or state.time > rows[-1][0].time:  # the session's read, not the truth's of the same tick
+                rows.append((state, SimRobot.read(built.robot), built.robot.foot_contacts()))
             return state
 
         robot.read = recording_read  # type: ignore[method-assign]
@@ -126,3 +127,14 @@ def test_each_config_mistake_is_one_line(tmp_path: Path, edit: tuple[str, str], 
     with pytest.raises(ConfigError, match=message) as error:
         load_estimator_config(path)
     assert "\n" not in str(error.value)
+
+
+def test_a_nan_in_a_repeated_reading_latches_too(walk: tuple[tuple[str, ...], list[Row]]) -> None:
+    """A reading with the previous one's time stamp carries nothing new to fuse, but its NaN is still a fault."""
+    names, rows = walk
+    estimator = StateEstimator.for_g1(names)
+    for measured, _, _ in rows[:50]:
+        estimator.update(measured)
+    again = dataclasses.replace(rows[49][0], joint_vel=np.full(len(names), math.nan))
+    estimator.update(again)
+    assert estimator.fault == "non-finite input: joint_vel (legs)"
