@@ -90,7 +90,11 @@ class Perturbations:
 
 def apply_to_model(model: mujoco.MjModel, p: Perturbations) -> None:
     """Friction, payload and effort limits into a freshly compiled G1 scene."""
-    model.geom_friction[:, 0] *= p.friction_scale  # every geom: MuJoCo takes the larger of a contact pair's frictions
+    # Sliding friction, both ways a contact gets it: the G1 MJCF pairs each foot capsule with the floor explicitly
+    # (`<contact><pair>`), and such a contact takes the pair's own friction (both tangential directions), not its geoms';
+    # any other contact takes the larger of its two geoms' frictions.
+    model.geom_friction[:, 0] *= p.friction_scale
+    model.pair_friction[:, :2] *= p.friction_scale
     model.body_mass[model.body(g1.TORSO_BODY).id] += p.payload_kg
     model.actuator_forcerange[:] *= p.torque_scale
 

@@ -66,7 +66,9 @@ class FaultConfig:
     """When the estimate can no longer be trusted: the fault latches until `reset()`."""
 
     max_position_std: float  # m: the base position's standard deviation beyond which the filter has diverged
-    slip_speed: float  # m/s: flat feet sliding apart, or the lower foot's velocity against the IMU's, filtered
+    slip_speed: float  # m/s: flat feet sliding apart, filtered
+    # the lower foot's horizontal velocity innovation squared over its variance, filtered (chi-square, 2 degrees of freedom)
+    slip_chi2: float
     flat_height: float  # m: a foot this close above the lower one is flat on the ground, for the slip watch
     slip_time_constant: float  # s: the low-pass filter on both slip measures (touchdown transients pass through it)
     max_gap: float  # s: the longest time between two updates

@@ -31,11 +31,37 @@ def test_pushes_are_scheduled_from_the_seed() -> None:
 def test_friction_payload_and_motor_strength_change_the_model(assets: object) -> None:
     model = build_model(assets.g1_mjcf)  # type: ignore[attr-defined]
     friction, mass = model.geom_friction[:, 0].copy(), model.body_mass[model.body(g1.TORSO_BODY).id]
-    limits = model.actuator_forcerange.copy()
+    pairs, limits = model.pair_friction.copy(), model.actuator_forcerange.copy()
     apply_to_model(model, Perturbations(friction_scale=0.5, payload_kg=4.0, torque_scale=0.8))
-    assert np.allclose(model.geom_friction[:, 0], 0.5 * friction)  # the feet too: a contact takes the larger of the two
+    assert np.allclose(model.geom_friction[:, 0], 0.5 * friction)
+    assert model.npair > 0 and np.allclose(model.pair_friction[:, :2], 0.5 * pairs[:, :2])  # the feet's pairs with the floor
+    assert np.allclose(model.pair_friction[:, 2:], pairs[:, 2:])  # torsional and rolling friction as they were
     assert model.body_mass[model.body(g1.TORSO_BODY).id] == pytest.approx(mass + 4.0)
     assert np.allclose(model.actuator_forcerange, 0.8 * limits)
+
+
+def _feet_slide(mjcf: Path, friction_scale: float) -> float:
+    """How far (m) the feet of a G1 held standing slide under 60 N pulling each foot sideways for 0.3 s."""
+    model = build_model(mjcf)
+    apply_to_model(model, Perturbations(friction_scale=friction_scale))
+    sim = SimRobot(model)
+    n, feet = g1.NUM_JOINTS, [model.body(body).id for body in g1.ANKLE_BODIES]
+    q = np.array(g1.default_joint_vector())
+    sim.write(JointCommand(q=q, dq=np.zeros(n), kp=np.full(n, 150.0), kd=np.full(n, 5.0), tau_ff=np.zeros(n)))
+    sim.step(int(0.5 / sim.timestep))
+    before = sim.data.xpos[feet, :2].copy()
+    sim.data.xfrc_applied[feet, 0] = 60.0  # 120 N in all: below the floor's grip (0.8 x 35 kg x g), far above a quarter of it
+    sim.step(int(0.3 / sim.timestep))
+    slide = float(np.max(np.linalg.norm(sim.data.xpos[feet, :2] - before, axis=1)))
+    sim.close()
+    return slide
+
+
+def test_a_low_friction_makes_the_feet_slide(assets: object) -> None:
+    """The foot-floor contacts are explicit pairs in the G1 MJCF: the scale must reach their friction."""
+    mjcf = assets.g1_mjcf  # type: ignore[attr-defined]
+    assert _feet_slide(mjcf, 1.0) < 0.005
+    assert _feet_slide(mjcf, 0.25) > 0.1
 
 
 def test_latency_gains_noise_and_drops_sit_between_robot_and_controller(assets: object) -> None:

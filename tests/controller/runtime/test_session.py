@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -9,7 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from controller.commands.waypoints import WorldWaypoint
+from controller.estimation.estimator import StateEstimator
 from controller.inputs.scripted import ScenarioStep, ScriptedSource
+from controller.reference.waypoints import WaypointFollower, WaypointReference
+from controller.runtime.estimation import EstimatedRobot
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend
 from controller.runtime.sim_run import SimRunConfig, run
@@ -17,6 +22,7 @@ from controller.tracking.presets import load_policy
 from controller.tracking.registry import TrackerSpec, available_trackers, make_tracker
 from hw.errors import ConfigError, RunAborted
 from hw.shipped import config_dir
+from hw.types import RobotState
 from sim.robot import SimRobot
 
 
@@ -89,3 +95,31 @@ def test_an_error_mid_run_still_writes_the_report_and_plot(tmp_path: Path, monke
     assert report["error"] == "RuntimeError: injected: the simulator stopped"
     assert report["sim_seconds"] == pytest.approx(0.5, abs=0.03) and report["falls"] == 0
     assert report_path.with_suffix(".png").stat().st_size > 10_000
+
+
+def test_an_estimator_fault_holds_a_position_reference_standing(g1_model, assets, tmp_path: Path, linear_onnx) -> None:  # type: ignore[no-untyped-def]
+    """Waypoints walk to positions: once the estimate is lost the robot stands for good, and the report says why and when."""
+    robot = SimRobot(g1_model)
+    tracker = load_policy(str(tiny_policy_yaml(tmp_path, linear_onnx)), assets, robot.joint_names)
+    estimated = EstimatedRobot(robot, StateEstimator.for_g1(robot.joint_names, assets_dir=str(assets.root)))
+    reference = WaypointReference(WaypointFollower([WorldWaypoint(1.0, 0.0)], limits=tracker.command_limits))
+    backend = DirectSimBackend(robot)
+    read = robot.read
+    broken = {"imu": False}
+
+    def reading() -> RobotState:
+        state = read()
+        return dataclasses.replace(state, imu_accel=np.full(3, np.nan)) if broken["imu"] else state
+
+    robot.read = reading  # type: ignore[method-assign]
+    with backend, standing() as source:
+        session = Session(backend, tracker, source, reference, estimated)
+        session.start()
+        for k in range(10):
+            broken["imu"] = k >= 5
+            backend.advance_to(session.start_time + k / tracker.rate_hz)
+            assert session.tick()
+        report = session.report()
+    assert report["final_mode"] == "stand" and not report["damp_reason"]
+    assert report["hold_reason"] == "state estimate lost (non-finite input: imu_accel): standing, nothing walks to a position any more"
+    assert report["hold_time"] == pytest.approx(5 / 50) and report["estimator"]["fault"] == "non-finite input: imu_accel"
