@@ -67,6 +67,11 @@ CASES = (
 
 def select_cases(hardware: Sequence[str], names: Sequence[str] | None) -> list[tuple[Case, str]]:
     """(case, hardware) pairs to run: `sim` is the simulator directly with `--estimator`; unknown names are refused."""
+    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+
+    for where in hardware:
+        if where != "sim" and is_real_robot(where):  # an unknown name is refused in one line by the config loader
+            raise ConfigError(f"bench estimator --backends: '{where}' is a real robot; the benchmark needs a simulator's truth")
     known = {case.name: case for case in CASES}
     unknown = sorted(set(names or ()) - set(known))
     if unknown:

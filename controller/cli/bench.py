@@ -1,7 +1,7 @@
 """`g1ctl bench ...`: benchmarks, each printing and writing a JSON report.
 
 g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S] [--estimator]
-g1ctl bench estimator [--report PATH] [--hardware sim-can,sim-dds] [--cases NAMES] [--seed 1]
+g1ctl bench estimator [--report PATH] [--backends sim-can,sim-dds] [--cases NAMES] [--seed 1]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
@@ -34,9 +34,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
     estimator = bench_sub.add_parser("estimator", help="the state estimator against the simulator's truth: drift, heading, velocity, cost")
     estimator.add_argument("--report", type=Path, default=None)
-    estimator.add_argument(
-        "--hardware", default="sim-can,sim-dds", help="comma-separated: sim (the simulator with --estimator), sim-can, ..."
-    )
+    estimator.add_argument("--backends", default="sim-can,sim-dds", help="comma-separated: sim (the simulator, --estimator) or hardware configs")
     estimator.add_argument("--cases", default=None, help="comma-separated case names (default: all; see the printed table)")
     estimator.add_argument("--seed", type=int, default=1)
 
@@ -127,9 +125,8 @@ def _text(args: argparse.Namespace) -> int:
     import sys  # noqa: PLC0415
 
     from controller.bench.text import TextBenchConfig, run_text_bench  # noqa: PLC0415
-    from controller.text.service import TextPlanner  # noqa: PLC0415
-
     from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+    from controller.text.service import TextPlanner  # noqa: PLC0415
 
     if args.hardware is not None and is_real_robot(args.hardware):
         raise ConfigError(f"bench text --hardware {args.hardware}: a real robot; the suite runs on simulated hardware (sim-can, sim-dds)")
@@ -153,7 +150,7 @@ def _estimator(args: argparse.Namespace) -> int:
 
     from controller.bench import estimator as be  # noqa: PLC0415 - imports MuJoCo
 
-    cases = be.select_cases(args.hardware.split(","), args.cases.split(",") if args.cases else None)
+    cases = be.select_cases(args.backends.split(","), args.cases.split(",") if args.cases else None)
     report = be.run_estimator_bench(cases, args.seed, args.assets_dir, progress=lambda line: print(line, file=sys.stderr, flush=True))
     print(be.format_table(report))
     _save(report, args.report)
