@@ -34,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
     estimator = bench_sub.add_parser("estimator", help="the state estimator against the simulator's truth: drift, heading, velocity, cost")
     estimator.add_argument("--report", type=Path, default=None)
-    estimator.add_argument("--backends", default="sim-can,sim-dds", help="comma-separated: sim (the simulator, --estimator) or hardware configs")
+    estimator.add_argument("--backends", default="sim-can,sim-dds", help="comma-separated: sim (the simulator) or hardware configs")
     estimator.add_argument("--cases", default=None, help="comma-separated case names (default: all; see the printed table)")
     estimator.add_argument("--seed", type=int, default=1)
 
