@@ -12,7 +12,6 @@ Orientation is the IMU's attitude as measured, yaw included: its heading is the 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -218,7 +217,11 @@ class StateEstimator:
         pos, vel, attitude = self._good
         if self._fault is not None and np.isfinite(state.base_quat).all():
             attitude = state.base_quat
-        return dataclasses.replace(state, base_pos=np.array(pos), base_lin_vel=np.array(vel), base_quat=attitude, has_base_position=True)
+        return RobotState(  # every field, written out: dataclasses.replace costs 14 us of the budget's 200 (a test checks the fields)
+            time=state.time, joint_pos=state.joint_pos, joint_vel=state.joint_vel, base_quat=attitude, base_ang_vel=state.base_ang_vel,
+            base_pos=np.array(pos), base_lin_vel=np.array(vel), has_base_position=True, imu_accel=state.imu_accel,
+            joint_tau=state.joint_tau,
+        )  # fmt: skip
 
 
 def _first_nonfinite(state: RobotState, legs: FloatArray) -> str | None:

@@ -138,3 +138,14 @@ def test_a_nan_in_a_repeated_reading_latches_too(walk: tuple[tuple[str, ...], li
     again = dataclasses.replace(rows[49][0], joint_vel=np.full(len(names), math.nan))
     estimator.update(again)
     assert estimator.fault == "non-finite input: joint_vel (legs)"
+
+
+def test_the_estimate_carries_every_other_field_of_the_measured_state(walk: tuple[tuple[str, ...], list[Row]]) -> None:
+    names, rows = walk
+    estimator = StateEstimator.for_g1(names)
+    measured = rows[10][0]
+    estimate = estimator.update(measured)
+    changed = {"base_pos", "base_lin_vel", "base_quat", "has_base_position"}
+    for field in dataclasses.fields(RobotState):
+        if field.name not in changed:
+            assert getattr(estimate, field.name) is getattr(measured, field.name), field.name
