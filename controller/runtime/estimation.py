@@ -69,7 +69,8 @@ class EstimatedRobot:
         return {
             "rate_hz": round((updates - 1) / span, 2) if updates > 1 and span > 0 else None,
             "updates": updates,
-            "update_ms": percentiles_ms(self.estimator.update_seconds),
+            "update_ms": percentiles_ms(self.estimator.update_seconds),  # wall: what the tick waited, preemption included
+            "update_cpu_ms": percentiles_ms(self.estimator.update_cpu_seconds),  # the update's own cost
             "fault": self.estimator.fault,
         }
 
