@@ -186,6 +186,8 @@ class TextReference(ReferenceSource):
         self._t0 = 0.0
         self._intended: Pose = (0.0, 0.0, 0.0)
         self._deadline = math.inf
+        # A program that walks or turns steers to positions: a failed state estimate stands it (a gesture-only one goes on).
+        self.needs_base_position = any(clause.motion is not None for clause in program.clauses)
 
     @property
     def current(self) -> ClauseRecord | None:

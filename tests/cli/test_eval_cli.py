@@ -57,4 +57,8 @@ def test_a_sweep_from_the_command_line_with_seeds_and_hardware_overridden(tmp_pa
     assert "seeds >= 1" in one_line_error(g1ctl("eval", "--suite", str(suite), "--seeds", "0"))
     assert "unknown suite 'nope'" in one_line_error(g1ctl("eval", "--suite", "nope"))
     names = g1ctl("scenarios").stdout  # where a user finds the names
-    assert "suites:        faults, robustness, smoke" in names and "overheat-left-knee" in names and "perturbations: push, rough" in names
+    assert (
+        "suites:        faults, robustness, smoke" in names
+        and "overheat-left-knee" in names
+        and "perturbations: low-friction, push, rough" in names
+    )

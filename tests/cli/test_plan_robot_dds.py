@@ -10,6 +10,7 @@ what is tested is the job on `robot_run`, not balance on a wall clock that a loa
 from __future__ import annotations
 
 import json
+import math
 import signal
 import subprocess
 import sys
@@ -47,7 +48,10 @@ def test_plan_runs_on_a_robot_that_answers_measured_by_its_own_view(tmp_path: Pa
     # The clause ran its 3 s and ended. Its gesture is judged through sim-can (test_plan_cli.py): hanging in the gantry the
     # detector, tuned on a robot that stands, saw the wave in 1 of 2 runs here.
     assert wave["end_s"] - wave["start_s"] == pytest.approx(3.0, abs=0.1) and not wave["timed_out"]
-    assert wave["displacement"] is None or max(map(abs, wave["displacement"])) < 0.1  # null: nothing estimates the position yet
+    # Hanging in the gantry the legs step in the air while the IMU stays still: the state estimator gives up on its
+    # position ("feet slipping"), and a wave, which walks to no position, goes on; the displacement is its last estimate.
+    assert len(wave["displacement"]) == 2 and all(math.isfinite(v) for v in wave["displacement"])
+    assert report["run"]["estimator"]["updates"] > 100 and "judged_by" not in report["run"]["estimator"]
     run = report["run"]
     assert run["robot"].endswith("my-g1.yaml") and run["input"] == "unitree-remote"  # robot_run, the robot's remote in hand
     assert run["final_mode"] == "run" and run["hw"]["faults"] == 0
