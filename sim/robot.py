@@ -44,14 +44,11 @@ class SimRobot(RobotInterface):
         self._accel_adr = slice(int(model.sensor_adr[accel.id]), int(model.sensor_adr[accel.id]) + 3)
         self._cos_max_tilt = float(np.cos(np.deg2rad(fall.max_tilt_deg)))
         self._floor_id = model.geom(FLOOR_GEOM).id
-        self._foot_geoms = tuple(
-            frozenset(
-                g
-                for g in range(model.ngeom)
-                if model.geom_bodyid[g] == model.body(body).id and model.geom_contype[g] | model.geom_conaffinity[g]
-            )
-            for body in constants.ANKLE_BODIES
-        )
+        # Each geom's foot: 1 left, 2 right (a collision geom of that ankle body), 0 none; a lookup per contact.
+        self._foot_of_geom = np.zeros(model.ngeom + 1, dtype=np.int8)  # the extra last entry: "no geom" (-1)
+        for side, body in enumerate(constants.ANKLE_BODIES, start=1):
+            touching = (model.geom_bodyid == model.body(body).id) & ((model.geom_contype | model.geom_conaffinity) != 0)
+            self._foot_of_geom[:-1][touching] = side
         self._gains: tuple[FloatArray | None, FloatArray | None] = (None, None)
         self.reset()
 
@@ -106,15 +103,11 @@ class SimRobot(RobotInterface):
 
     def foot_contacts(self) -> tuple[bool, bool]:
         """Left, right: whether any collision geom of the foot touches the floor, as of the last physics step."""
-        left = right = False
-        floor, (left_geoms, right_geoms) = self._floor_id, self._foot_geoms
-        contact = self.data.contact
-        for i in range(self.data.ncon):
-            g1, g2 = int(contact.geom1[i]), int(contact.geom2[i])
-            other = g2 if g1 == floor else g1 if g2 == floor else -1
-            left = left or other in left_geoms
-            right = right or other in right_geoms
-        return left, right
+        n, floor = self.data.ncon, self._floor_id
+        first, second = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        other = np.where(first == floor, second, np.where(second == floor, first, -1))  # what touches the floor
+        feet = self._foot_of_geom[other]
+        return bool((feet == 1).any()), bool((feet == 2).any())
 
     def write(self, command: JointCommand) -> None:
         """Load the PD law into the actuators: force = kp q* + kd dq* + tau - kp q - kd dq."""
