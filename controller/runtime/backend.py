@@ -32,7 +32,9 @@ class Backend(abc.ABC):
         """Run the robot side (physics, bus cycles) until time `t`."""
 
     def truth(self) -> RobotState | None:
-        """Ground truth where a simulator stands behind the robot (for metrics); None otherwise."""
+        """Ground truth where a simulator stands behind a robot that is not itself (for metrics); None where the robot's
+        own state is the truth (the simulator read directly: the session reads it there when an estimator runs) or
+        there is no simulator."""
         return None
 
     def truth_contacts(self) -> tuple[bool, bool] | None:

@@ -46,9 +46,6 @@ class DirectSimBackend(Backend):
     def now(self) -> float:
         return self.sim.time
 
-    def truth(self) -> RobotState:
-        return self.sim.read()
-
     def truth_contacts(self) -> tuple[bool, bool]:
         return self.sim.foot_contacts()
 
@@ -83,6 +80,9 @@ class PerturbedSimBackend(DirectSimBackend):
             self.pushes.apply()
         self.pushes.apply()
         self.sim.step_until(t)
+
+    def truth(self) -> RobotState:
+        return self.sim.read()  # the controller's view is perturbed; the truth is not
 
     def close(self) -> None:
         if self.robot is not self.sim:
