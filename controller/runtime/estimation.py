@@ -141,6 +141,12 @@ class EstimateJudge:
             "contact_disagreements": self.contact_disagreements,
         }
 
+    def restart(self) -> None:
+        """The robot was put back at the start and the estimate begun afresh: the frames are aligned again, and the drift,
+        the heading drift and the distance count from here (the velocity and contact errors keep the whole run)."""
+        self._origin = None
+        self.distance_m = 0.0
+
     def waypoint_errors(self, settled: Sequence[WaypointError]) -> list[dict[str, float]]:
         """Each waypoint's error when the controller settled on it, as the truth had the robot then."""
         errors = []

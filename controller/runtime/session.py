@@ -95,6 +95,8 @@ class Session:
             if self.estimated is not None and self.estimate_metrics is not None:
                 self.estimated.reset()
                 self.estimate_metrics.reset_reference()
+                if self.estimate_judge is not None:
+                    self.estimate_judge.restart()
             self.reference.start(self.robot.read())
         return True
 

@@ -58,3 +58,15 @@ def test_waypoint_errors_are_the_truths_at_the_settling_tick() -> None:
         judge.record(s, truth, (True, True), None)
     settled = [WaypointError(0.0, 0.0, 0.5, (0.5, 0.0, 0.0))]
     assert judge.waypoint_errors(settled) == [{"position_m": 0.05, "heading_deg": 3.0}]
+
+
+def test_a_restart_aligns_the_frames_again() -> None:
+    """The simulator stood the robot up at the origin after a fall and the estimate began afresh: no jump counts as drift."""
+    judge = EstimateJudge()
+    judge.record(_state(0.0, 0.0, 0.0, 0.0), _state(0.0, 0.0, 0.0, 0.0), (True, True), None)
+    judge.record(_state(10.0, 2.0, 0.0, 0.0), _state(10.0, 2.1, 0.0, 0.0), (True, True), None)  # 0.1 m drift, then a fall
+    judge.restart()
+    judge.record(_state(10.02, 0.0, 0.0, 0.0), _state(10.02, 0.0, 0.0, 0.0), (True, True), None)
+    judge.record(_state(20.0, 1.0, 0.0, 0.0), _state(20.0, 1.0, 0.0, 0.0), (True, True), None)
+    r = judge.report()
+    assert r["position_drift_m"] == 0.0 and r["distance_m"] == pytest.approx(1.0)
