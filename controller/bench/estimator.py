@@ -30,9 +30,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from controller.runtime.run_config import SimRunConfig
+from controller.runtime.run_config import SimRunConfig, is_real_robot
 from controller.runtime.sim_run import run
 from hw.errors import ConfigError
+from sim.perturbations import load_perturbations
 
 MAX_DRIFT_PER_DISTANCE = 0.01
 MAX_HEADING_DRIFT_DEG_PER_MIN = 2.0
@@ -69,8 +70,6 @@ CASES = (
 
 def select_cases(hardware: Sequence[str], names: Sequence[str] | None) -> list[tuple[Case, str]]:
     """(case, hardware) pairs to run: `sim` is the simulator directly with `--estimator`; unknown names are refused."""
-    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
-
     for where in hardware:
         if where != "sim" and is_real_robot(where):  # an unknown name is refused in one line by the config loader
             raise ConfigError(f"bench estimator --backends: '{where}' is a real robot; the benchmark needs a simulator's truth")
@@ -89,8 +88,6 @@ def _runs_on(case: Case, hardware: str) -> bool:
 
 def run_case(case: Case, hardware: str, seed: int, assets_dir: str | None) -> dict[str, Any]:
     """One run with the estimator in control; its figures and which targets they meet."""
-    from sim.perturbations import load_perturbations  # noqa: PLC0415
-
     cfg = SimRunConfig(
         scenario=case.scenario, planner=case.planner, duration=case.duration, seed=seed, assets_dir=assets_dir,
         hardware=None if hardware == "sim" else hardware, estimator=True, faults=case.faults,
