@@ -45,10 +45,11 @@ class SimRobot(RobotInterface):
         self._cos_max_tilt = float(np.cos(np.deg2rad(fall.max_tilt_deg)))
         self._floor_id = model.geom(FLOOR_GEOM).id
         # Each geom's foot: 1 left, 2 right (a collision geom of that ankle body), 0 none; a lookup per contact.
-        self._foot_of_geom = np.zeros(model.ngeom + 1, dtype=np.int8)  # the extra last entry: "no geom" (-1)
+        foot_of_geom = np.zeros(model.ngeom, dtype=np.int64)
         for side, body in enumerate(constants.ANKLE_BODIES, start=1):
             touching = (model.geom_bodyid == model.body(body).id) & ((model.geom_contype | model.geom_conaffinity) != 0)
-            self._foot_of_geom[:-1][touching] = side
+            foot_of_geom[touching] = side
+        self._foot_of_geom: list[int] = foot_of_geom.tolist()
         self._gains: tuple[FloatArray | None, FloatArray | None] = (None, None)
         self.reset()
 
@@ -103,11 +104,12 @@ class SimRobot(RobotInterface):
 
     def foot_contacts(self) -> tuple[bool, bool]:
         """Left, right: whether any collision geom of the foot touches the floor, as of the last physics step."""
-        n, floor = self.data.ncon, self._floor_id
-        first, second = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
-        other = np.where(first == floor, second, np.where(second == floor, first, -1))  # what touches the floor
-        feet = self._foot_of_geom[other]
-        return bool((feet == 1).any()), bool((feet == 2).any())
+        floor, foot_of_geom = self._floor_id, self._foot_of_geom
+        left = right = False
+        for first, second in self.data.contact.geom[: self.data.ncon].tolist():  # a few contacts: plain ints beat numpy here
+            side = foot_of_geom[second] if first == floor else foot_of_geom[first] if second == floor else 0
+            left, right = left or side == 1, right or side == 2
+        return left, right
 
     def write(self, command: JointCommand) -> None:
         """Load the PD law into the actuators: force = kp q* + kd dq* + tau - kp q - kd dq."""

@@ -1,19 +1,24 @@
-"""The G1's leg kinematics in numpy, its constants read once from the G1 MJCF (no MuJoCo on this path).
+"""The G1's leg kinematics, compiled (numba), its constants read once from the G1 MJCF (no MuJoCo on this path).
 
 Each leg is a chain of six bodies from the pelvis to the ankle-roll link, one hinge each. The
 MJCF gives every body's offset and orientation in its parent and every hinge's axis (inline or
-from its default class); `LegKinematics` turns joint angles and rates into each foot's contact
-point in the pelvis frame, its velocity (J dq) and the Jacobians. The numbers match MuJoCo's own
-kinematics to rounding (tests/controller/estimation/test_kinematics.py).
+from its default class); `leg_kinematics` (compiled, numba: a dozen 3x3 products are all there
+is, and an interpreter would spend its time on the calls) turns joint angles and rates into
+each foot's contact point in the pelvis frame, its velocity (J dq) and the Jacobians. The
+numbers match MuJoCo's own kinematics to rounding (tests/controller/estimation/test_kinematics.py).
 """
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
+from numpy.typing import NDArray
 
 from hw.errors import AssetError
 from hw.g1 import ROOT_BODY
@@ -137,11 +142,8 @@ class LegKinematics:
     """Both legs at once: foot contact points in the pelvis frame, their velocities and Jacobians.
 
     `update(q, dq)` takes the 12 leg joints (left hip pitch .. ankle roll, then right) and fills
-    `foot_pos` (2, 3) and `foot_vel` (2, 3) (J dq); `jac_pos` and `jac_rot` (2, 3, 6) are views of
-    the last update's Jacobians. numpy's cost is per call, not per number, so both legs go through
-    a dozen batched calls: every body's homogeneous transform in its parent in one product
-    (Rodrigues, its terms precomputed), the transforms down the chains in three (a prefix scan),
-    then the hinge axes, the levers and the Jacobian columns.
+    `foot_pos` (2, 3), `foot_vel` (2, 3) (J dq) and the Jacobians `jac_pos`, `jac_rot` (2, 3, 6).
+    The work is `leg_kinematics`, compiled; the estimator calls it inside its own compiled step.
     """
 
     def __init__(self, chains: tuple[LegChain, LegChain], contact_offset: tuple[float, float, float] = SOLE_OFFSET) -> None:
@@ -151,84 +153,98 @@ class LegKinematics:
         self.chains = chains
         self.joint_names: tuple[str, ...] = chains[0].joints + chains[1].joints
         self.contact_offset = np.asarray(contact_offset, dtype=np.float64)
-        # Arrays are (body, leg, ...): slices along the chain stay contiguous.
-        body_rot = np.stack([c.body_rot for c in chains], axis=1)  # (6, 2, 3, 3)
-        axis = np.stack([c.joint_axis for c in chains], axis=1)  # (6, 2, 3)
-        skew = np.zeros((6, 2, 3, 3))
+        body_rot = np.stack([c.body_rot for c in chains])  # (2, 6, 3, 3)
+        axis = np.stack([c.joint_axis for c in chains])  # (2, 6, 3)
+        skew = np.zeros((2, 6, 3, 3))  # K, the cross product with the axis
         skew[..., 0, 1], skew[..., 0, 2], skew[..., 1, 2] = -axis[..., 2], axis[..., 1], -axis[..., 0]
         skew -= np.swapaxes(skew, -1, -2)
-        # A body's transform in its parent at hinge angle q is [Rb (I + sin q K + (1 - cos q) K^2), pb; 0 0 0 1]
-        # (Rodrigues, the hinge at the body's origin): the row (1, sin q, cos q) times three 4x4 matrices.
-        basis = np.zeros((6, 2, 3, 4, 4))
-        basis[:, :, 0, :3, :3] = body_rot + body_rot @ skew @ skew
-        basis[:, :, 0, :3, 3] = np.stack([c.body_pos for c in chains], axis=1)
-        basis[:, :, 0, 3, 3] = 1.0
-        basis[:, :, 1, :3, :3] = body_rot @ skew
-        basis[:, :, 2, :3, :3] = -body_rot @ skew @ skew
-        self._basis = basis.reshape(6, 2, 3, 16)
-        self._coef = np.ones((6, 2, 1, 3))
-        # The prefix scan (Hillis-Steele): _SCAN_PAD identities, then the six hinged bodies' transforms and the
-        # contact point's (a translation in the ankle-roll link); three products of each entry with the one
-        # 1, 2, 4 places up leave every entry the transform from the pelvis to it.
-        self._scan = np.zeros((4, _SCAN_PAD + 7, 2, 4, 4))
-        self._scan[...] = np.eye(4)
-        self._scan[0, -1, :, :3, 3] = self.contact_offset
-        self._local = self._scan[0, _SCAN_PAD : _SCAN_PAD + 6].reshape(6, 2, 1, 16)
-        self._axis = np.zeros((6, 2, 4, 1))  # each hinge's axis in its body's frame (a direction: no translation)
-        self._axis[:, :, :3, 0] = axis
-        self._axes = np.zeros((6, 2, 4, 1))  # each hinge's axis in the pelvis frame
-        self._lever = np.zeros((6, 2, 3))  # from each hinge to the foot
-        self._outer = np.zeros((6, 2, 3, 3))
-        self._columns = np.zeros((6, 2, 3))  # each hinge's column of the position Jacobian: axis x lever
-        frames = self._scan[-1, _SCAN_PAD:]  # (7, 2, 4, 4): each body after its hinge, then the contact point
-        self._hinges = frames[:6, :, :3, 3]  # a body's origin is its hinge
-        self._after = frames[:6]
-        self.foot_pos = frames[6, :, :3, 3]  # (2, 3), a view
+        # A body's rotation in its parent at hinge angle q is Rb (I + sin q K + (1 - cos q) K^2) (Rodrigues, the hinge at
+        # the body's origin): rest + sin q * sine + cos q * cosine.
+        self.constants = LegConstants(
+            rest=body_rot + body_rot @ skew @ skew,
+            sine=body_rot @ skew,
+            cosine=-body_rot @ skew @ skew,
+            offset=np.stack([c.body_pos for c in chains]),
+            axis=axis,
+            contact=self.contact_offset,
+        )
+        self.foot_pos = np.zeros((2, 3))
         self.foot_vel = np.zeros((2, 3))
-        # The views each update works on, made once: a view costs about as much as a small numpy call.
-        self._sin, self._cos = self._coef[:, :, 0, 1], self._coef[:, :, 0, 2]
-        self._scan_steps = [
-            (self._scan[step, _SCAN_PAD - (1 << step) : -(1 << step)], self._scan[step, _SCAN_PAD:], self._scan[step + 1, _SCAN_PAD:])
-            for step in range(3)
-        ]
-        self._axes_column = self._axes[..., :3, :]
-        self._lever_row = self._lever[..., None, :]
-        self._outer_flat = self._outer.reshape(6, 2, 9)
-        self._columns_by_leg = np.swapaxes(self._columns, 0, 1)  # (2, 6, 3)
-        self._foot_vel_row = self.foot_vel[:, None, :]
+        self.jac_pos = np.zeros((2, 3, 6))  # d foot_pos / d q per leg
+        self.jac_rot = np.zeros((2, 3, 6))  # the foot's angular velocity per unit joint rate, per leg
+        self._in_order = np.arange(12)
 
     @classmethod
     def from_mjcf(cls, mjcf: Path, contact_offset: tuple[float, float, float] = SOLE_OFFSET) -> LegKinematics:
         return cls(read_leg_chains(mjcf), contact_offset)
 
-    @property
-    def jac_pos(self) -> FloatArray:
-        """(2, 3, 6): d foot_pos / d q per leg (a view of the last update)."""
-        return np.transpose(self._columns, (1, 2, 0))
-
-    @property
-    def jac_rot(self) -> FloatArray:
-        """(2, 3, 6): the foot's angular velocity per unit joint rate, per leg (a view of the last update)."""
-        return np.transpose(self._axes[:, :, :3, 0], (1, 2, 0))
-
     def update(self, q: FloatArray, dq: FloatArray) -> None:
         """Forward kinematics and Jacobians of both legs at joint angles `q` (12), velocities from rates `dq` (12)."""
-        angles = q.reshape(2, 6).T
-        np.sin(angles, out=self._sin)
-        np.cos(angles, out=self._cos)
-        np.matmul(self._coef, self._basis, out=self._local)
-        for parents, bodies, out in self._scan_steps:
-            np.matmul(parents, bodies, out=out)
-        np.matmul(self._after, self._axis, out=self._axes)
-        np.subtract(self.foot_pos, self._hinges, out=self._lever)
-        # axis x lever: the outer product of the two contracted with the permutation symbol.
-        np.multiply(self._axes_column, self._lever_row, out=self._outer)
-        np.matmul(self._outer_flat, _LEVI_CIVITA, out=self._columns)
-        np.matmul(dq.reshape(2, 1, 6), self._columns_by_leg, out=self._foot_vel_row)
+        leg_kinematics(q, dq, self._in_order, self.constants, self.foot_pos, self.foot_vel, self.jac_pos, self.jac_rot)
 
 
-_SCAN_PAD = 4  # identities before the chain's seven transforms: the scan's largest step
-# (a x b)_k = sum_ij eps_ijk a_i b_j: the permutation symbol, row i * 3 + j, column k.
-_LEVI_CIVITA = np.array(
-    [[0, 0, 0], [0, 0, 1], [0, -1, 0], [0, 0, -1], [0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, 0, 0]], dtype=np.float64
-)
+class LegConstants(NamedTuple):
+    """What `leg_kinematics` needs of the model, per leg (first axis) and body (second, hip to ankle)."""
+
+    rest: FloatArray  # (2, 6, 3, 3): the body's rotation in its parent, the part independent of the hinge angle
+    sine: FloatArray  # (2, 6, 3, 3): ... the part times its sine
+    cosine: FloatArray  # (2, 6, 3, 3): ... the part times its cosine
+    offset: FloatArray  # (2, 6, 3): the body's origin (its hinge) in its parent
+    axis: FloatArray  # (2, 6, 3): the hinge's axis in the body's frame
+    contact: FloatArray  # (3): the contact point in the ankle-roll link's frame
+
+
+@njit(cache=True)
+def leg_kinematics(
+    q: FloatArray,
+    dq: FloatArray,
+    legs: NDArray[np.intp],
+    model: LegConstants,
+    foot_pos: FloatArray,
+    foot_vel: FloatArray,
+    jac_pos: FloatArray,
+    jac_rot: FloatArray,
+) -> None:
+    """Both legs' contact points (2, 3), their velocities (2, 3) and Jacobians (2, 3, 6), in place, in the pelvis frame.
+
+    `q`, `dq`: joint angles and rates; `legs` (12): where each leg joint sits in them (left hip pitch .. right ankle roll).
+    """
+    rot = np.empty((3, 3))
+    turned = np.empty((3, 3))
+    hinges = np.empty((6, 3))
+    for leg in range(2):
+        rot[:] = 0.0
+        rot[0, 0] = rot[1, 1] = rot[2, 2] = 1.0
+        t0 = t1 = t2 = 0.0
+        for j in range(6):
+            angle = q[legs[6 * leg + j]]
+            s, c = math.sin(angle), math.cos(angle)
+            o = model.offset[leg, j]
+            t0 += rot[0, 0] * o[0] + rot[0, 1] * o[1] + rot[0, 2] * o[2]
+            t1 += rot[1, 0] * o[0] + rot[1, 1] * o[1] + rot[1, 2] * o[2]
+            t2 += rot[2, 0] * o[0] + rot[2, 1] * o[1] + rot[2, 2] * o[2]
+            rest, sine, cosine = model.rest[leg, j], model.sine[leg, j], model.cosine[leg, j]
+            for a in range(3):
+                for b in range(3):
+                    total = 0.0
+                    for m in range(3):
+                        total += rot[a, m] * (rest[m, b] + s * sine[m, b] + c * cosine[m, b])
+                    turned[a, b] = total
+            rot[:] = turned
+            hinges[j, 0], hinges[j, 1], hinges[j, 2] = t0, t1, t2
+            u = model.axis[leg, j]
+            for a in range(3):
+                jac_rot[leg, a, j] = rot[a, 0] * u[0] + rot[a, 1] * u[1] + rot[a, 2] * u[2]
+        p = model.contact
+        for a in range(3):
+            foot_pos[leg, a] = (t0, t1, t2)[a] + rot[a, 0] * p[0] + rot[a, 1] * p[1] + rot[a, 2] * p[2]
+            foot_vel[leg, a] = 0.0
+        for j in range(6):  # each hinge's column of the position Jacobian: its axis x the lever from it to the foot
+            lx, ly, lz = foot_pos[leg, 0] - hinges[j, 0], foot_pos[leg, 1] - hinges[j, 1], foot_pos[leg, 2] - hinges[j, 2]
+            ax, ay, az = jac_rot[leg, 0, j], jac_rot[leg, 1, j], jac_rot[leg, 2, j]
+            jac_pos[leg, 0, j] = ay * lz - az * ly
+            jac_pos[leg, 1, j] = az * lx - ax * lz
+            jac_pos[leg, 2, j] = ax * ly - ay * lx
+            rate = dq[legs[6 * leg + j]]
+            for a in range(3):
+                foot_vel[leg, a] += jac_pos[leg, a, j] * rate

@@ -45,11 +45,13 @@ class EstimatedRobot:
 
     def __init__(self, robot: RobotInterface, estimator: StateEstimator) -> None:
         self.robot, self.estimator = robot, estimator
+        self.measured: RobotState | None = None  # the last reading as the robot gave it (where the robot is a simulator: the truth)
         self.first_time: float | None = None
         self.last_time: float | None = None
 
     def read(self) -> RobotState:
-        estimate = self.estimator.update(self.robot.read())
+        self.measured = self.robot.read()
+        estimate = self.estimator.update(self.measured)
         if self.first_time is None:
             self.first_time = estimate.time
         self.last_time = estimate.time
@@ -98,10 +100,10 @@ class EstimateJudge:
     def record(
         self, estimate: RobotState, truth: RobotState, estimated_contacts: tuple[bool, bool], true_contacts: tuple[bool, bool] | None
     ) -> None:
-        # Plain floats: this runs every tick of a judged run, beside a 0.1 ms estimator update.
+        # Plain floats: this runs every tick of a judged run, beside an estimator update of a few microseconds.
         tx, ty = truth.base_pos[:2].tolist()
         ex, ey = estimate.base_pos[:2].tolist()
-        truth_yaw, estimate_yaw = _heading(truth.base_quat), _heading(estimate.base_quat)
+        truth_yaw, estimate_yaw = quat.heading_of(truth.base_quat), quat.heading_of(estimate.base_quat)
         if self._origin is None:
             self._origin = (tx, ty, truth_yaw, ex, ey, estimate_yaw)
             self.first_time = estimate.time
@@ -157,9 +159,3 @@ class EstimateJudge:
             miss = abs(math.degrees(float(quat.wrap_angle(th - heading))))
             errors.append({"position_m": round(math.hypot(tx - x, ty - y), 4), "heading_deg": round(miss, 3)})
         return errors
-
-
-def _heading(q: np.ndarray) -> float:
-    """The yaw of a w, x, y, z quaternion (`hw.quat.heading` on floats)."""
-    w, x, y, z = q.tolist()
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))

@@ -71,7 +71,7 @@ class Session:
             self.damp_time = round(state.time - self.start_time, 4)
         truth = backend.truth()
         if truth is None and self.estimated is not None and backend.measures_base_position:
-            truth = backend.robot.read()  # the simulator read directly is its own truth; the controller sees the estimate
+            truth = self.estimated.measured  # the simulator read directly is its own truth; the controller sees the estimate
         measured = truth or state  # metrics use the simulator's ground truth where there is one
         self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
         if self.estimated is not None:

@@ -37,7 +37,7 @@ class TrackingMetrics:
         self._prev = None
 
     def record(self, t: float, base_pos: FloatArray, base_quat: FloatArray, command: VelocityCommand) -> None:
-        yaw = float(quat.heading(base_quat))
+        yaw = quat.heading_of(base_quat)
         if command != self._last_command:
             self._last_command = command
             self._changed_at = t
@@ -49,7 +49,7 @@ class TrackingMetrics:
         wx, wy = (px - prev[1]) / dt, (py - prev[2]) / dt
         c, s = math.cos(yaw), math.sin(yaw)
         vx, vy = c * wx + s * wy, -s * wx + c * wy
-        wz = float(quat.wrap_angle(yaw - prev[3])) / dt
+        wz = quat.wrapped(yaw - prev[3]) / dt
         self.times.append(t)
         self.commanded.append((command.vx, command.vy, command.yaw_rate))
         self.measured.append((vx, vy, wz))
@@ -116,8 +116,8 @@ class PlanTrackingMetrics:
     def record(self, t: float, measured: RobotState, plan: ReferenceSample) -> None:
         planned_xy = plan.qpos[g1.QPOS_ROOT_POS][:2]
         self._path.append(math.hypot(float(measured.base_pos[0] - planned_xy[0]), float(measured.base_pos[1] - planned_xy[1])))
-        heading = float(quat.heading(plan.qpos[g1.QPOS_ROOT_QUAT]))
-        self._heading.append(abs(float(quat.wrap_angle(float(quat.heading(measured.base_quat)) - heading))))
+        heading = quat.heading_of(plan.qpos[g1.QPOS_ROOT_QUAT])
+        self._heading.append(abs(quat.wrapped(quat.heading_of(measured.base_quat) - heading)))
         index = list(self.upper_body)
         joints = plan.qpos[g1.QPOS_JOINTS]
         self._upper.append(float(np.mean(np.abs(measured.joint_pos[index] - joints[index]))))

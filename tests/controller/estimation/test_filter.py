@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.estimation.filter import correct, predict
+from controller.estimation.filter import NO_ROW, correct, predict
 
 # The estimator's measurements, as (row, minus): left foot - base, right foot - base, base velocity twice.
-MEASUREMENTS = ((2, 0), (3, 0), (1, None), (1, None))
+MEASUREMENTS = ((2, 0), (3, 0), (1, NO_ROW), (1, NO_ROW))
 
 
 def textbook(x, p, f, q, b, h, r, z):  # type: ignore[no-untyped-def]
@@ -26,35 +26,35 @@ def test_one_step_matches_the_textbook_equations_column_by_column() -> None:
         p = a @ a.T + 0.1 * np.eye(4)
         x, z, accel = rng.normal(size=(4, 3)), rng.normal(size=(4, 3)), rng.normal(size=3)
         q, r = rng.uniform(0.01, 1.0, 4), rng.uniform(0.01, 1.0, 4)
-        x_new, p_new = x.tolist(), p.tolist()
-        predict(x_new, p_new, dt, accel.tolist(), q.tolist())
-        for (row, minus), z_row, r_row in zip(MEASUREMENTS, z.tolist(), r.tolist(), strict=True):
+        x_new, p_new = x.copy(), p.copy()
+        predict(x_new, p_new, dt, accel, q)
+        for (row, minus), z_row, r_row in zip(MEASUREMENTS, z, r, strict=True):
             correct(x_new, p_new, row, minus, z_row, r_row)
         f = np.eye(4)
         f[0, 1] = dt
         h = np.zeros((4, 4))
         for i, (row, minus) in enumerate(MEASUREMENTS):
             h[i, row] = 1.0
-            if minus is not None:
+            if minus != NO_ROW:
                 h[i, minus] = -1.0
         b = np.outer([0.5 * dt * dt, dt, 0.0, 0.0], accel)
         for column in range(3):  # every column is its own filter sharing the covariance
             want_x, want_p = textbook(x[:, column], p, f, np.diag(q), b[:, column], h, np.diag(r), z[:, column])
-            np.testing.assert_allclose(np.array(x_new)[:, column], want_x, atol=1e-12)
+            np.testing.assert_allclose(x_new[:, column], want_x, atol=1e-12)
             np.testing.assert_allclose(p_new, want_p, atol=1e-12)
-        np.testing.assert_array_equal(p_new, np.array(p_new).T)  # exactly symmetric
+        np.testing.assert_array_equal(p_new, p_new.T)  # exactly symmetric
 
 
 def test_a_control_input_adds_to_the_prediction() -> None:
-    x = [[1.0] * 3, [2.0] * 3, [0.0] * 3, [0.0] * 3]
-    predict(x, np.eye(4).tolist(), 0.1, [1.0, 0.0, -1.0], [0.0] * 4)
+    x = np.array([[1.0] * 3, [2.0] * 3, [0.0] * 3, [0.0] * 3])
+    predict(x, np.eye(4), 0.1, np.array([1.0, 0.0, -1.0]), np.zeros(4))
     np.testing.assert_allclose(x[:2], [[1.205, 1.2, 1.195], [2.1, 2.0, 1.9]])
 
 
 def test_a_scalar_measurement_weights_by_the_variances() -> None:
     """x ~ N(0, 4) measured as 3 with variance 1: the posterior is 3 * 4 / 5 with variance 4 * 1 / 5."""
-    x = [[0.0] * 3 for _ in range(4)]
-    p = np.diag([1.0, 4.0, 1.0, 1.0]).tolist()
-    correct(x, p, 1, None, [3.0, 3.0, 3.0], 1.0)
+    x = np.zeros((4, 3))
+    p = np.diag([1.0, 4.0, 1.0, 1.0])
+    correct(x, p, 1, NO_ROW, np.full(3, 3.0), 1.0)
     np.testing.assert_allclose(x[1], [2.4] * 3)
-    np.testing.assert_allclose(p[1][1], 0.8)
+    np.testing.assert_allclose(p[1, 1], 0.8)
