@@ -16,10 +16,11 @@ import pytest
 
 from hw import g1
 from hw.emulation.faults import FaultPlan
+from hw.emulation.imu_model import ImuModelConfig
 from hw.emulation.rig import SimulatedHardware
 from hw.errors import BusError, HardwareFault, LifecycleError, MotorNotFoundError
 from hw.hardware_robot import HardwareRobot, Lifecycle
-from hw.jointmap import BusConfig, HardwareConfig, load_hardware_config
+from hw.jointmap import BusConfig, HardwareConfig, load_hardware_config, load_motor_models
 from hw.types import JointCommand
 from sim.hardware_twin import MuJoCoPlant
 from sim.robot import SimRobot
@@ -317,3 +318,44 @@ def test_a_host_with_a_wrong_joint_map_is_caught_on_the_wire(g1_model) -> None:
         report = twin.audit.report()
         assert report["outside_limits"] >= 1 and {v["joint"] for v in report["outside_examples"]} == {"left_knee_joint"}
         assert report["commands"] >= 29 * 10
+
+
+def test_the_host_reads_every_joint_and_the_imu_as_the_plant_was_one_physics_step_before(g1_model) -> None:
+    """What a real bus gives: an MIT motor answers a command with the state at the exchange, so the host's read after a
+    cycle is the plant before that cycle's physics step, joints and IMU from the same instant; off only by the codec's
+    rounding (half a code step; the IMU noise-free here). An estimator must take its input as that old (issue 21)."""
+    cfg = fast_config("sim-can")
+    cfg = dataclasses.replace(cfg, imu_model=ImuModelConfig(accel_noise=0.0, gyro_noise=0.0))
+    models = load_motor_models()
+    ranges = [models[cfg.joints[name].model] for name in g1.JOINT_NAMES]
+    gear = np.array([cfg.joints[name].gear_ratio for name in g1.JOINT_NAMES])
+    half_step = {  # joint side, per joint: position 16 bits, velocity and torque 12 bits over the model's range
+        "joint_pos": np.array([r.p_max for r in ranges]) / 65535 / gear + 1e-9,
+        "joint_vel": np.array([r.v_max for r in ranges]) / 4095 / gear + 1e-9,
+        "joint_tau": np.array([r.t_max for r in ranges]) / 4095 * gear + 1e-9,
+    }
+    plant = MuJoCoPlant(SimRobot(g1_model))
+    with SimulatedHardware(cfg, plant) as twin:
+        host = HardwareRobot(twin.host_config, stamp_clock=plant.time, await_replies=twin.await_replies)
+        try:
+            activate(host, twin)
+            n, legs = g1.NUM_JOINTS, slice(0, 12)
+            moved = 0.0
+            for k in range(40):  # the legs swing at 4 Hz: joints accelerating, so one step of age shows
+                q = host.default_pose.copy()
+                q[legs] += 0.3 * np.sin(2 * np.pi * 4.0 * 0.002 * k)
+                host.write(JointCommand(q=q, dq=np.zeros(n), kp=np.full(n, 100.0), kd=np.full(n, 2.0), tau_ff=np.zeros(n)))
+                before = plant.robot.read()  # the plant as the motors sample it for this cycle's replies
+                host.cycle()
+                twin.step()
+                read, now = host.read(), plant.robot.read()
+                for field, tolerance in half_step.items():
+                    assert (np.abs(getattr(read, field) - getattr(before, field)) <= tolerance).all(), (k, field)
+                np.testing.assert_allclose(read.base_quat, before.base_quat, atol=1e-6)
+                np.testing.assert_allclose(read.base_ang_vel, before.base_ang_vel, atol=1e-5)
+                np.testing.assert_allclose(read.imu_accel, before.imu_accel, rtol=1e-6, atol=1e-5)
+                moved = max(moved, float(np.abs(now.joint_vel - before.joint_vel).max()))
+            assert moved > 20 * half_step["joint_vel"].max()  # the plant moved on meanwhile: the read is not the plant now
+        finally:
+            host.close()
+            plant.robot.close()
