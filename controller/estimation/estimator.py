@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,8 +41,21 @@ class StateEstimator:
         self.kinematics = kinematics
         self._legs = np.array([list(joint_names).index(name) for name in kinematics.joint_names], dtype=np.intp)
         self._settings = settings(config)
+        self.reset()
+        self._warm_up(len(joint_names))
         self.update_seconds: list[float] = []  # wall time of each update: what the control tick waits for
         self.update_cpu_seconds: list[float] = []  # this thread's CPU time of each: the update's own cost, without preemption
+
+    def _warm_up(self, joints: int) -> None:
+        """One update on a standing reading, then forget it: the compiled step is loaded (or compiled) now, at
+        construction, not at a robot's first control tick, where a 0.4 s stall (more on a first run) would starve it."""
+        standing = RobotState(
+            time=0.0, joint_pos=np.zeros(joints), joint_vel=np.zeros(joints), base_quat=np.array([1.0, 0.0, 0.0, 0.0]),
+            base_ang_vel=np.zeros(3), base_pos=np.zeros(3), base_lin_vel=np.zeros(3), has_base_position=False,
+            imu_accel=np.array([0.0, 0.0, self.config.gravity]), joint_tau=np.zeros(joints),
+        )  # fmt: skip
+        self._step(standing)
+        self._step(replace(standing, time=0.02))
         self.reset()
 
     @classmethod
