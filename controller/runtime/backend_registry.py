@@ -46,7 +46,7 @@ class BuiltBackend:
     world: SimRobot | None  # the simulator's model and state (video, viewer, picture, final position, a job's truth); None: a real robot
     joint_limits: tuple[np.ndarray, np.ndarray]  # lower, upper (rad) in G1 order: what planned motion keeps to
     pushes: PushForces | None = None  # the perturbations' pushes on the pelvis, for the report
-    remote: DdsConfig | None = None  # where the G1's own remote is read (`--input unitree-remote`): the robot's domain
+    remote_dds: DdsConfig | None = None  # where the G1's own remote is read (`--input unitree-remote`): the robot's domain
 
 
 Builder = Callable[["RunPlan", "Assets", ExitStack], BuiltBackend]

@@ -264,7 +264,7 @@ def build_real_dds(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBack
     clock = RunClock()
     backend = stack.enter_context(RealDdsBackend(DdsRobot(hardware, clock=clock.now), name, clock))
     limits = np.array([hardware.joints[joint].position_limits for joint in g1.JOINT_NAMES])
-    return BuiltBackend(backend, None, (limits[:, 0], limits[:, 1]), remote=hardware.dds)
+    return BuiltBackend(backend, None, (limits[:, 0], limits[:, 1]), remote_dds=hardware.dds)
 
 
 def build_simulated_dds(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBackend:
@@ -277,4 +277,4 @@ def build_simulated_dds(plan: RunPlan, assets: Assets, stack: ExitStack) -> Buil
     drills = tuple(arg for fault in (plan.faults.robot if plan.faults is not None else ()) for arg in ("--fault", fault))
     robot_args = (*remote, *drills, "--joint-map", name, "--seed", str(plan.seed))
     backend = stack.enter_context(SimulatedDdsBackend(world, hardware, name, plan.assets_dir, robot_args))
-    return BuiltBackend(backend, world, world.joint_limits(), remote=backend.host.cfg.dds)  # on the domain it claimed
+    return BuiltBackend(backend, world, world.joint_limits(), remote_dds=backend.host.cfg.dds)  # on the domain it claimed

@@ -114,7 +114,7 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
     side = plan.backend.builder()(plan, assets, stack)
     backend = side.backend
     source = stack.enter_context(
-        open_input(plan.input, tracker.command_limits, plan.scenario, plan.duration or 0.0, plan.seed, side.remote)
+        open_input(plan.input, tracker.command_limits, plan.scenario, plan.duration or 0.0, plan.seed, side.remote_dds)
     )
     # Simulated time moves as the loop sleeps; a robot that runs on its own moves on the wall clock as its backend waits.
     clock = (RealtimeSimulationClock if plan.clock == "simulated-realtime" else SimulationClock)(backend.now, backend.advance_to)

@@ -29,6 +29,7 @@ from controller.runtime.run_config import RunConfig
 from controller.runtime.run_plan import resolve_run
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend, PerturbedSimBackend, SimulatedHardwareBackend
+from hw.dds.config import DdsHardwareConfig
 from hw.errors import ConfigError, HardwareFault, MotorNotFoundError, RunAborted
 from hw.shipped import config_dir
 from sim.perturbations import Perturbations
@@ -96,7 +97,7 @@ def test_the_in_process_builders_make_their_backend(kind: str, assets: Assets) -
         with ExitStack() as stack:
             side = plan.backend.builder()(plan, assets, stack)
             expected = PerturbedSimBackend if kind == "simulator" and perturbations is not None else BACKEND_CLASSES[kind]
-            assert type(side.backend) is expected and side.world is not None and side.remote is None
+            assert type(side.backend) is expected and side.world is not None and side.remote_dds is None
             assert (side.pushes is not None) == (perturbations is not None or kind == "simulated-buses")
             lower, upper = side.joint_limits
             assert lower.shape == upper.shape == (29,) and (lower < upper).all()
@@ -290,3 +291,20 @@ def test_a_fault_mid_run_on_a_robot_ends_damped_with_its_cause_as_on_the_simulat
     assert "real_time_factor" in sim and "real_time_factor" not in robot and "final_base_position" not in robot
     assert robot["hw"]["faults"] == 0  # the robot itself was sound: the host damped it for the fault it was told of
     assert counters["damping_commands"] >= 1 and counters["commands"] > 0  # and the robot took the damping
+
+
+@pytest.mark.slow  # the simulated G1 in its own process
+def test_the_robots_remote_is_read_on_the_domain_the_simulated_robot_took(tmp_path: Path, sim_dds_config: Callable[[], Path]) -> None:
+    """The config's domain is held (here by this test session, as by another run on the machine), so the simulated G1 runs on
+    a spare one: its remote, playing the scenario, is read there, not on the config's domain, where nothing answers."""
+    if importlib.util.find_spec("cyclonedds") is None:
+        pytest.skip("the g1 extra (cyclonedds) is not installed")
+    config = sim_dds_config()
+    configured = choose_backend(str(config)).hardware
+    assert isinstance(configured, DdsHardwareConfig)
+    report_path = tmp_path / "remote.json"
+    result = g1ctl("sim", "--hardware", str(config), "--input", "unitree-remote", "--duration", "3", "--report", str(report_path))
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["hw"]["domain"] != configured.dds.domain and report["input"] == "unitree-remote"
+    assert report["input_losses"] == 0 and report["damp_reason"] == "", report["damp_reason"]
