@@ -57,7 +57,6 @@ class BackendEntry:
     """One kind of robot a run drives: what it honours, its clock, and its builder (`module:function`, see `Builder`)."""
 
     name: str
-    summary: str
     build: str
     simulated: bool  # a simulator stands behind the robot: video, picture, viewer, fault drills, a real-time factor
     physics_in_process: bool  # the physics runs in this process: perturbations (pushes, friction, payload ...) reach it
@@ -72,23 +71,27 @@ class BackendEntry:
 
 
 BACKENDS: dict[str, BackendEntry] = {
+    # The G1 in MuJoCo in this process, commanded directly.
     "simulator": BackendEntry(
-        name="simulator", summary="the G1 in MuJoCo in this process, commanded directly",
+        name="simulator",
         build="controller.runtime.sim_backends:build_simulator", simulated=True, physics_in_process=True, fault_plans=None,
         clock="simulated", measures_base_position=True,
     ),
+    # CAN and RS-485 buses with firmware emulators and MuJoCo behind them, in this process (sim-can, sim-mixed).
     "simulated-buses": BackendEntry(
-        name="simulated-buses", summary="CAN and RS-485 buses with firmware emulators and MuJoCo behind them, in this process",
+        name="simulated-buses",
         build="controller.runtime.sim_backends:build_simulated_buses", simulated=True, physics_in_process=True, fault_plans="buses",
         clock="simulated", measures_base_position=False,
     ),
+    # The simulated G1 in its own process (g1ctl robot --dds), over DDS on loopback (sim-dds).
     "simulated-dds": BackendEntry(
-        name="simulated-dds", summary="the simulated G1 in its own process (g1ctl robot --dds), over DDS",
+        name="simulated-dds",
         build="controller.runtime.dds_backend:build_simulated_dds", simulated=True, physics_in_process=False, fault_plans="dds",
         clock="wall", measures_base_position=False,
     ),
+    # A real G1 over its low-level DDS topics (g1-dds, or your copy).
     "real-dds": BackendEntry(
-        name="real-dds", summary="a real G1 over its low-level DDS topics",
+        name="real-dds",
         build="controller.runtime.dds_backend:build_real_dds", simulated=False, physics_in_process=False, fault_plans=None,
         clock="wall", measures_base_position=False,
     ),

@@ -110,9 +110,8 @@ class SimulatedHardwareBackend(HardwareBackend):
         name or path) the emulators and the controller's commands act out. `perturbations`: pushes switched on each bus
         cycle (one physics step), the host seen and commanded through them. `seed`: the run's, for the pushes and the
         IMU's noise."""
-        plan = faults
         imu_bus = cfg.imu.bus if cfg.imu is not None else None
-        plans = load_faults(plan, faults_name, list(cfg.buses), imu_bus) if plan is not None else None
+        plans = load_faults(faults, faults_name, list(cfg.buses), imu_bus) if faults is not None else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
         cfg = dataclasses.replace(cfg, safety=safety)
         self.sim = truth
@@ -129,8 +128,8 @@ class SimulatedHardwareBackend(HardwareBackend):
         self._wrappers: list[RobotInterface] = []  # outermost last: the controller writes into it
         if perturbations is not None and perturbations.senses:
             self._wrappers.append(PerturbedRobot(host, perturbations, rng))
-        if plan is not None and plan.host.start_s is not None:
-            self._wrappers.append(FaultyCommands(self._wrappers[-1] if self._wrappers else host, plan.host, plant.time))
+        if faults is not None and faults.host.start_s is not None:
+            self._wrappers.append(FaultyCommands(self._wrappers[-1] if self._wrappers else host, faults.host, plant.time))
         if self._wrappers:
             self.robot = self._wrappers[-1]
 
