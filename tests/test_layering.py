@@ -26,11 +26,16 @@ PACKAGES = ("controller", "hw", "sim")
 MUJOCO_FOLDERS = ("sim", "controller/bench")
 TORCH_FOLDERS = ("controller/training",)
 
-# The hardware run path: what `g1ctl hw ...` and a hardware session load.
+# The hardware run path: what `g1ctl hw ...` and a hardware session load (a run on a real robot: the driver, the plan of
+# the run, the backend registry and the DDS backends).
 HARDWARE_PATH_MODULES = (
     "controller.runtime.hardware",
     "controller.runtime.loop",
     "controller.runtime.supervisor",
+    "controller.runtime.driver",
+    "controller.runtime.run_plan",
+    "controller.runtime.backend_registry",
+    "controller.runtime.dds_backend",
     "controller.cli.main",
     "controller.cli.hw",
 )

@@ -262,7 +262,7 @@ def test_the_readmes_cheap_commands_run(command: Command, tmp_path: Path) -> Non
         assert "kind" in json.loads(result.stdout)
     if "--report" in argv:
         report = json.loads((tmp_path / argv[argv.index("--report") + 1]).read_text())
-        assert report["sim_seconds"] == pytest.approx(1.0) and report["falls"] == 0
+        assert report["run_seconds"] == pytest.approx(1.0) and report["falls"] == 0
 
 
 def test_the_readme_runs_some_of_each_kind() -> None:

@@ -30,8 +30,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from controller.runtime.run_config import SimRunConfig, is_real_robot
-from controller.runtime.sim_run import run
+from controller.runtime.backend_registry import choose_backend
+from controller.runtime.driver import run
+from controller.runtime.run_config import RunConfig
 from hw.errors import ConfigError
 from sim.perturbations import load_perturbations
 
@@ -71,7 +72,7 @@ CASES = (
 def select_cases(hardware: Sequence[str], names: Sequence[str] | None) -> list[tuple[Case, str]]:
     """(case, hardware) pairs to run: `sim` is the simulator directly with `--estimator`; unknown names are refused."""
     for where in hardware:
-        if where != "sim" and is_real_robot(where):  # an unknown name is refused in one line by the config loader
+        if where != "sim" and not choose_backend(where).entry.simulated:  # an unknown name is refused in one line by the loader
             raise ConfigError(f"bench estimator --backends: '{where}' is a real robot; the benchmark needs a simulator's truth")
     known = {case.name: case for case in CASES}
     unknown = sorted(set(names or ()) - set(known))
@@ -88,7 +89,7 @@ def _runs_on(case: Case, hardware: str) -> bool:
 
 def run_case(case: Case, hardware: str, seed: int, assets_dir: str | None) -> dict[str, Any]:
     """One run with the estimator in control; its figures and which targets they meet."""
-    cfg = SimRunConfig(
+    cfg = RunConfig(
         scenario=case.scenario, planner=case.planner, duration=case.duration, seed=seed, assets_dir=assets_dir,
         hardware=None if hardware == "sim" else hardware, estimator=True, faults=case.faults,
         perturbations=load_perturbations(case.perturb, seed) if case.perturb else None,

@@ -17,7 +17,8 @@ import numpy as np
 
 from controller.assets import ensure_assets
 from controller.inputs.scripted import load_scenario
-from controller.runtime.sim_run import SimRunConfig, run
+from controller.runtime.driver import run
+from controller.runtime.run_config import RunConfig
 from controller.tracking.presets import load_policy
 from hw import g1 as constants
 from sim.world import build_model
@@ -79,7 +80,7 @@ def minimal_loop_rtf(policy_name: str, duration: float, assets_dir: str | None) 
 
 
 def stack_rtf(policy_name: str, duration: float, assets_dir: str | None, estimator: bool = False) -> float:
-    report = run(SimRunConfig(scenario="walk_turn_stop", policy=policy_name, duration=duration, assets_dir=assets_dir, estimator=estimator))
+    report = run(RunConfig(scenario="walk_turn_stop", policy=policy_name, duration=duration, assets_dir=assets_dir, estimator=estimator))
     if report["falls"]:
         raise RuntimeError("the stack's robot fell during the benchmark")
     return float(report["real_time_factor"])

@@ -150,7 +150,7 @@ def run_text_bench(
             "gestures": sorted({g for c in result["clauses"] for g in c["gestures"]}),
             "order_accuracy": result["order_accuracy"],
             "transition_score": result["transition_score"],
-            "sim_seconds": result["run"]["sim_seconds"],
+            "run_seconds": result["run"]["run_seconds"],
             "timed_out_clauses": sum(c["timed_out"] for c in result["clauses"]),
         }
         if cfg.kinematic and len(program.clauses) > 1:

@@ -125,17 +125,18 @@ def _text(args: argparse.Namespace) -> int:
     import sys  # noqa: PLC0415
 
     from controller.bench.text import TextBenchConfig, run_text_bench  # noqa: PLC0415
-    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
     from controller.text.service import TextPlanner  # noqa: PLC0415
 
-    if args.hardware is not None and is_real_robot(args.hardware):
+    hardware = choose_backend(args.hardware) if args.hardware is not None else None  # loaded once for every prompt's run
+    if hardware is not None and not hardware.entry.simulated:
         raise ConfigError(f"bench text --hardware {args.hardware}: a real robot; the suite runs on simulated hardware (sim-can, sim-dds)")
     cfg = TextBenchConfig(suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic)
     planner = TextPlanner.load(condition_text=not args.no_text)
     report = run_text_bench(
         cfg,
         planner.resolve,
-        lambda program: planner.simulate(program, seed=args.seed, policy=args.policy, hardware=args.hardware),
+        lambda program: planner.simulate(program, seed=args.seed, policy=args.policy, hardware=hardware),
         lambda program, blend: planner.composed_transition(program, blend, args.seed),
         progress=lambda line: print(line, file=sys.stderr, flush=True),
     )

@@ -20,8 +20,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hw.errors import ConfigError
+
+if TYPE_CHECKING:
+    from controller.runtime.backend_registry import BackendChoice
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -50,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     runs = args.sim or args.hardware is not None
     if args.video is not None and not runs:
         raise ConfigError("--video needs a run to film: add --sim, or --hardware with simulated hardware (sim-can, sim-mixed, sim-dds)")
-    on_robot = args.hardware is not None and _real_robot(args)
+    hardware = _hardware(args) if args.hardware is not None else None
+    on_robot = hardware is not None and not hardware.entry.simulated
     if args.video is not None and not on_robot:
         from sim import use_headless_gl  # noqa: PLC0415
 
@@ -68,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"report: {args.report}")
         return 0
     report = planner.simulate(program, seed=args.seed, policy=args.policy, video=args.video, report=args.report,
-                              blend=not args.naive, progress=args.progress, hardware=args.hardware,
+                              blend=not args.naive, progress=args.progress, hardware=hardware,
                               status=on_robot and sys.stderr.isatty())  # fmt: skip
     for c in report["clauses"]:
         flags = " (timed out)" if c["timed_out"] else ""
@@ -88,18 +93,19 @@ def run(args: argparse.Namespace) -> int:
     return 1 if report["falls"] or faulted else 0
 
 
-def _real_robot(args: argparse.Namespace) -> bool:
-    """`--hardware` names a real G1; the options a robot cannot honour are refused here, before anything loads."""
-    from controller.runtime.run_config import SimRunConfig, is_real_robot  # noqa: PLC0415
+def _hardware(args: argparse.Namespace) -> BackendChoice:
+    """`--hardware`, loaded once for the whole command; on a real G1 the options it cannot honour are refused here, before
+    anything loads."""
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
+    from controller.runtime.run_config import RunConfig  # noqa: PLC0415
+    from controller.runtime.run_plan import check_options  # noqa: PLC0415
 
-    if not is_real_robot(args.hardware):
-        return False
-    from controller.runtime.robot_run import robot_config  # noqa: PLC0415 - the g1 extra, no MuJoCo
-
-    robot_config(SimRunConfig(hardware=args.hardware, video=args.video))  # one line for --video, as `g1ctl run` says it
-    if args.progress:
-        raise ConfigError("--progress: not on a real robot (the status line shows the run and the clause running)")
-    return True
+    choice = choose_backend(args.hardware)
+    if not choice.entry.simulated:
+        check_options(RunConfig(hardware=args.hardware, video=args.video), choice.entry)  # one line for --video, as `g1ctl run` says it
+        if args.progress:
+            raise ConfigError("--progress: not on a real robot (the status line shows the run and the clause running)")
+    return choice
 
 
 def _moved(displacement: list[float] | None) -> str:

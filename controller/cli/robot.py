@@ -73,7 +73,7 @@ def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | No
     if name in ("keyboard", "gamepad"):
         from controller.inputs.registry import open_input  # noqa: PLC0415
 
-        return remote_feed(stack.enter_context(open_input(name, limits, "", 0.0, 0)), limits)
+        return remote_feed(stack.enter_context(open_input(name, limits, None, 0.0, 0)), limits)
     from controller.inputs.scripted import ScriptedSource, load_scenario, timeline  # noqa: PLC0415
 
     scenario = load_scenario(name)

@@ -5,7 +5,8 @@ g1ctl run [--input auto|keyboard|gamepad|scripted|unitree-remote] [--scenario wa
           [--rt-priority 50] [--cpu N]
 
 With a real G1's config (`simulated: false`, e.g. a copy of g1-dds.yaml) the run drives that robot
-(`controller/runtime/robot_run.py`, no simulator): its own remote is the default input.
+(the same driver, `controller/runtime/driver.py`, on the registry's `real-dds` backend, no simulator):
+its own remote is the default input.
 
 With a display: MuJoCo's viewer, the planned motion drawn as a ghost beside the robot, held
 to the wall clock. Without one: headless. `--input auto` takes a gamepad when one is plugged
@@ -22,7 +23,6 @@ import sys
 from pathlib import Path
 
 from controller.inputs.registry import INPUTS
-from hw.errors import ConfigError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -54,26 +54,28 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def run(args: argparse.Namespace) -> int:
     from controller.cli.sim import run_and_summarize  # noqa: PLC0415
-    from controller.runtime.run_config import SimRunConfig, is_real_robot  # noqa: PLC0415
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
+    from controller.runtime.run_config import RunConfig  # noqa: PLC0415
+    from controller.runtime.run_plan import resolve_run  # noqa: PLC0415
 
-    on_robot = args.hardware is not None and is_real_robot(args.hardware)  # a real G1: no viewer, its own remote by default
+    choice = choose_backend(args.hardware)
+    on_robot = not choice.entry.simulated  # a real G1: no viewer, its own remote by default
     viewer = not on_robot and not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if not on_robot and (args.video is not None or not viewer):
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()
     source = "unitree-remote" if on_robot and args.input == "auto" else _choose_input(args.input)
-    cfg = SimRunConfig(
+    cfg = RunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
         assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(), rt_priority=args.rt_priority, cpu=args.cpu,
         estimator=args.estimator, estimator_config=args.estimator_config,
     )  # fmt: skip
-    if not on_robot and (args.rt_priority or args.cpu is not None):
-        raise ConfigError("--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy)")
+    plan = resolve_run(cfg, choice)
     if source != "scripted":
         print(f"g1ctl run: {source} input, {'viewer' if viewer else 'headless'}; Ctrl-C ends the run", file=sys.stderr)
-    return run_and_summarize(cfg, on_robot=True)
+    return run_and_summarize(plan)
 
 
 def _choose_input(choice: str) -> str:

@@ -18,7 +18,7 @@ from controller.inputs.registry import INPUTS
 from hw.errors import ConfigError
 
 if TYPE_CHECKING:
-    from controller.runtime.run_config import SimRunConfig
+    from controller.runtime.run_plan import RunPlan
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -59,49 +59,45 @@ def run(args: argparse.Namespace) -> int:
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()  # before MuJoCo is imported, which fixes its OpenGL backend
-    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
-    from sim.perturbations import load_perturbations  # noqa: PLC0415
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
+    from controller.runtime.run_config import RunConfig  # noqa: PLC0415
+    from controller.runtime.run_plan import resolve_run  # noqa: PLC0415
 
-    cfg = SimRunConfig(
+    choice = choose_backend(args.hardware)
+    if not choice.entry.simulated:
+        hardware = args.hardware
+        raise ConfigError(
+            f"hardware config '{hardware}' is a real robot: g1ctl sim simulates; drive it with g1ctl run --hardware {hardware}"
+        )
+    perturbations = None
+    if args.perturb:
+        from sim.perturbations import load_perturbations  # noqa: PLC0415 - MuJoCo
+
+        perturbations = load_perturbations(args.perturb, args.seed)
+    cfg = RunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=args.planner, duration=args.duration, seed=args.seed,
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
-        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config,
-        perturbations=load_perturbations(args.perturb, args.seed) if args.perturb else None,
+        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config, perturbations=perturbations,
     )  # fmt: skip
-    return run_and_summarize(cfg)
+    return run_and_summarize(resolve_run(cfg, choice))
 
 
-def run_and_summarize(cfg: SimRunConfig, on_robot: bool = False) -> int:
-    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault.
+def run_and_summarize(plan: RunPlan) -> int:
+    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault."""
+    from controller.runtime.driver import execute  # noqa: PLC0415
 
-    `on_robot`: a real robot's config (`simulated: false`) drives that robot (`g1ctl run`); otherwise it is refused.
-    """
-    from controller.runtime.run_config import is_real_robot  # noqa: PLC0415
-
-    if cfg.hardware is not None and is_real_robot(cfg.hardware):
-        if not on_robot:
-            hardware = cfg.hardware
-            raise ConfigError(
-                f"hardware config '{hardware}' is a real robot: g1ctl sim simulates; drive it with g1ctl run --hardware {hardware}"
-            )
-        from controller.runtime.robot_run import run as run_robot  # noqa: PLC0415 - the g1 extra, no MuJoCo
-
-        report = run_robot(cfg)
-    else:
-        from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
-
-        report = run_sim(cfg)
-    summary_keys = ("sim_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
+    report = execute(plan)
+    summary_keys = ("run_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
     print(json.dumps({k: report[k] for k in summary_keys if k in report}))
     if "plan_latency_ms" in report:
         print(json.dumps({k: report[k] for k in ("plan_latency_ms", "replans", "late_plans", "planner_failures") if k in report}))
     for key in ("video", "picture", "plot"):
         if key in report:
             print(f"{key}: {report[key]}")
-    if cfg.report:
-        print(f"report: {cfg.report}")
+    if plan.outputs.report:
+        print(f"report: {plan.outputs.report}")
     if "hw" in report:
         hw = report["hw"]
         keys = ("cycle_ms", "frames_sent", "frames_received", "dropped", "commands_sent", "states_received", "crc_errors", "faults")

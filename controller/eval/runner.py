@@ -1,6 +1,6 @@
 """Run a suite's episodes, in this process or as Ray tasks, into one report; an interrupted sweep resumes.
 
-Each episode is one `g1ctl sim` run (`sim_run.run`) from its own seed, so its result does not
+Each episode is one `g1ctl sim` run (`runtime/driver.py`, `run`) from its own seed, so its result does not
 depend on where or in what order it ran. Results are appended to a journal (`REPORT.jsonl`) as
 they finish; a second run of the same suite and report skips the episodes already there. With
 Ray, a task whose worker dies is retried once, then reported as failed, never dropped.
@@ -51,12 +51,12 @@ def episode_cpus(hardware: str) -> int:
 
 def run_episode(episode: EpisodeSpec, assets_dir: str | None = None) -> dict[str, Any]:
     """One episode on the simulator; any exception is the episode's failure, reported, not raised."""
-    from controller.runtime.run_config import SimRunConfig  # noqa: PLC0415
-    from controller.runtime.sim_run import run  # noqa: PLC0415 - MuJoCo, in the worker
+    from controller.runtime.driver import run  # noqa: PLC0415 - MuJoCo (the simulator's builders), in the worker
+    from controller.runtime.run_config import RunConfig  # noqa: PLC0415
 
     base = {"id": episode.id, "group": episode.group, "condition": episode.condition, "seed": episode.seed}
     perturbed = episode.perturbations if episode.perturbations != Perturbations() else None
-    cfg = SimRunConfig(
+    cfg = RunConfig(
         scenario=episode.scenario, policy=episode.policy, planner=episode.planner, duration=episode.duration_s, seed=episode.seed,
         tracker=None if episode.tracker == "default" else episode.tracker,
         hardware=None if episode.hardware == "none" else episode.hardware, perturbations=perturbed, assets_dir=assets_dir,

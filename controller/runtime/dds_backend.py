@@ -1,44 +1,53 @@
 """The G1 over DDS as a run backend: 500 Hz cycles on the wall clock between control ticks.
 
-`DdsBackend` drives a `DdsRobot` (the real robot, or any robot on the config's domain): the
-run's time is the wall clock, and between control ticks the backend runs one `cycle()` every
-2 ms, counting the cycles that start late. `SimulatedDdsBackend` first starts the simulated G1
-(`g1ctl robot --dds`) in a child process on the config's domain and interface, and mirrors
-the child's ground truth (`sim/truth`) into the run's own copy of the model, for the metrics,
-fall detection and the video. The robot process is stopped, and its counters kept, on every
-exit path.
+`DdsBackend` drives a `DdsRobot` (any robot on the config's domain): the run's time is the wall
+clock, and between control ticks the backend runs one `cycle()` every 2 ms, counting the cycles
+that start late. `RealDdsBackend` is a real G1: no ground truth, a fall is the IMU's tilt.
+`SimulatedDdsBackend` first starts the simulated G1 (`g1ctl robot --dds`) in a child process on
+the config's domain and interface, and mirrors the child's ground truth (`sim/truth`) into the
+run's own copy of the model, for the metrics, fall detection and the video. The robot process is
+stopped, and its counters kept, on every exit path. `build_real_dds` and `build_simulated_dds`
+make them from the plan of a run (the registry's `real-dds` and `simulated-dds`); only the
+simulated one imports MuJoCo, for its mirror.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+from contextlib import ExitStack
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
+from controller.runtime.backend_registry import BuiltBackend
 from controller.runtime.loop import Clock, RunClock
+from hw import g1, quat
 from hw.dds.config import DdsHardwareConfig
 from hw.dds.robot import DdsRobot
-from hw.errors import ConfigError, HardwareFault
+from hw.errors import HardwareFault
 from hw.g1 import CONTROL_CYCLE_HZ
 from hw.robot import Lifecycle
 from hw.types import RobotState
 
 if TYPE_CHECKING:
+    from controller.assets import Assets
+    from controller.runtime.run_plan import RunPlan
     from sim.robot import SimRobot
 
 PERIOD_S = 1.0 / CONTROL_CYCLE_HZ
 SIM_SOFT_START_S = 0.2  # the simulated robot starts in the default pose: nothing to ramp
 ROBOT_STOP_TIMEOUT_S = 10.0
+MAX_TILT_DEG = 60.0  # the simulator's fall threshold (`sim.robot.FallConfig`), from a real robot's IMU
 
 
 class DdsBackend(Backend):
@@ -109,6 +118,14 @@ class DdsBackend(Backend):
         self.host.close()
 
 
+class RealDdsBackend(DdsBackend):
+    """A real G1: no ground truth; a fall is the IMU's pelvis tilt past `MAX_TILT_DEG`."""
+
+    def has_fallen(self) -> bool:
+        up_z = float(quat.rotate(self.host.read().base_quat, np.array([0.0, 0.0, 1.0]))[2])
+        return up_z < math.cos(math.radians(MAX_TILT_DEG))
+
+
 class RobotProcess:
     """`g1ctl robot --dds` as a child process: started on a domain, stopped with SIGTERM, its JSON counters kept."""
 
@@ -169,8 +186,6 @@ class SimulatedDdsBackend(DdsBackend):
         self, mirror: SimRobot, cfg: DdsHardwareConfig, config_name: str, assets_dir: str | None = None, robot_args: tuple[str, ...] = ()
     ) -> None:
         """`robot_args`: more flags for `g1ctl robot --dds` (e.g. `--remote SCENARIO`: its wireless remote plays a scenario)."""
-        if not cfg.simulated:
-            raise ConfigError(f"hardware config '{config_name}' is a real robot ('simulated: false'): g1ctl sim drives simulated robots")
         from hw.dds.domains import claim_domain  # noqa: PLC0415
         from hw.dds.session import DdsSession  # noqa: PLC0415 - the g1 extra
         from sim.dds_truth import TRUTH_TOPIC, SimTruth_  # noqa: PLC0415
@@ -235,3 +250,31 @@ class SimulatedDdsBackend(DdsBackend):
             self.robot_process.stop()
             self._truth_session.close()
             self.domain.release()
+
+
+def _dds_config(plan: RunPlan) -> tuple[DdsHardwareConfig, str]:
+    if not isinstance(plan.hardware, DdsHardwareConfig) or plan.hardware_name is None:
+        raise TypeError(f"a G1 over DDS needs a DDS config, the plan has {type(plan.hardware).__name__}")
+    return plan.hardware, plan.hardware_name
+
+
+def build_real_dds(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBackend:
+    """The registry's `real-dds`: the robot on the config's network, its joint limits from the config (no MuJoCo)."""
+    hardware, name = _dds_config(plan)
+    clock = RunClock()
+    backend = stack.enter_context(RealDdsBackend(DdsRobot(hardware, clock=clock.now), name, clock))
+    limits = np.array([hardware.joints[joint].position_limits for joint in g1.JOINT_NAMES])
+    return BuiltBackend(backend, None, (limits[:, 0], limits[:, 1]), remote_dds=hardware.dds)
+
+
+def build_simulated_dds(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBackend:
+    """The registry's `simulated-dds`: `g1ctl robot --dds` started on a domain of this run's own, the run's model its mirror."""
+    from controller.runtime.sim_backends import simulated_world  # noqa: PLC0415 - MuJoCo, for the mirror
+
+    hardware, name = _dds_config(plan)
+    world = simulated_world(plan, assets, stack)
+    remote = ("--remote", plan.scenario_name) if plan.input == "unitree-remote" else ()  # the robot's remote plays the scenario
+    drills = tuple(arg for fault in (plan.faults.robot if plan.faults is not None else ()) for arg in ("--fault", fault))
+    robot_args = (*remote, *drills, "--joint-map", name, "--seed", str(plan.seed))
+    backend = stack.enter_context(SimulatedDdsBackend(world, hardware, name, plan.assets_dir, robot_args))
+    return BuiltBackend(backend, world, world.joint_limits(), remote_dds=backend.host.cfg.dds)  # on the domain it claimed

@@ -3,7 +3,7 @@
 `EstimatedRobot` puts a `StateEstimator` between a backend's robot and the controller: every
 read is one estimator update (the tracker's rate), so the session, the references and the
 tracker see the estimated base position, velocity and heading, and nothing else changes
-(the backend keeps its robot, and closes it). `attach_estimator` decides where one runs.
+(the backend keeps its robot, and closes it). `attach_estimator` puts one where the plan of the run says.
 `EstimateJudge` compares the estimate with the simulator's truth tick by tick where a
 simulator stands behind the robot; the metrics of the run keep using the truth.
 """
@@ -21,23 +21,21 @@ from controller.estimation.estimator import StateEstimator
 from controller.reports import percentiles_ms
 from controller.runtime.backend import Backend
 from hw import quat
-from hw.errors import ConfigError
 from hw.robot import RobotInterface
 from hw.types import JointCommand, RobotState
 
 if TYPE_CHECKING:
     from controller.reference.waypoints import WaypointError
+    from controller.runtime.run_plan import RunPlan
 
 
-def attach_estimator(backend: Backend, wanted: bool, config: str | None = None, assets_dir: str | None = None) -> EstimatedRobot | None:
-    """The controller's view through a state estimator wherever the robot measures no base position (every robot
-    but the simulator), or where `wanted` (`--estimator`: on the simulator too, to judge it against the truth)."""
-    if not wanted and backend.measures_base_position:
-        if config is not None:
-            raise ConfigError("--estimator-config: the simulator measures the base position itself; add --estimator to estimate it")
+def attach_estimator(backend: Backend, plan: RunPlan) -> EstimatedRobot | None:
+    """The controller's view through a state estimator where the plan of the run puts one (`RunPlan.estimator`: every
+    robot that measures no base position, and the simulator with `--estimator`, to judge the estimate by its truth)."""
+    if not plan.estimator:
         return None
     robot = backend.robot
-    return EstimatedRobot(robot, StateEstimator.for_g1(robot.joint_names, config_path=config, assets_dir=assets_dir))
+    return EstimatedRobot(robot, StateEstimator.for_g1(robot.joint_names, config_path=plan.estimator_config, assets_dir=plan.assets_dir))
 
 
 class EstimatedRobot:

@@ -1,7 +1,9 @@
-"""What a run is asked to do: `g1ctl sim` and `g1ctl run` parse into this; the simulator and the real robot both take it.
+"""What a run is asked to do: `g1ctl sim`, `g1ctl run`, the benchmarks, the sweeps and the text planner fill this in.
 
-Apart from `sim_run` so that a run on a real robot (`robot_run`) reads it without importing MuJoCo: the config,
-the hooks a job built on a run adds (the text planner), and whether a hardware config names a real robot.
+`RunConfig` holds names and options as given; `run_plan.resolve_run` checks them and loads what they
+name into the plan of the run, which the driver (`runtime/driver.py`) builds and drives, on the
+simulator or on a robot alike. `RunHooks` is what a job built on a run adds (the text planner).
+Nothing here imports MuJoCo.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class SimRunConfig:
+class RunConfig:
     scenario: str = "walk_turn_stop"
     policy: str = "fastsac"
     tracker: str | None = None  # None: "decoupled" with the planner, else "velocity"
@@ -36,8 +38,8 @@ class SimRunConfig:
     progress: bool = False
     assets_dir: str | None = None
     video_fps: int = 20
-    hardware: str | None = None  # a hardware config: drive the sim through its codecs and buses
-    faults: str | None = None  # with `hardware`: a YAML of faults to inject per bus
+    hardware: str | None = None  # a hardware config (name or path): the robot it names (None: the simulator directly)
+    faults: str | None = None  # with simulated hardware: a fault plan (name or path) to inject
     picture: Path | None = None  # PNG of the final frame
     status: bool = False  # a live status line on stderr (mode, command, measured velocity, plan latency)
     perturbations: Perturbations | None = None  # pushes, friction, payload, motor strength, latency, noise (`sim.perturbations`)
@@ -55,18 +57,9 @@ class RunHooks:
     simulator's ground truth at the tick, also where the controller reads the simulator directly
     (None: no simulator behind the robot, a real one). `caption()` is written
     on each video frame and on the status line; `done()` ends the run before its duration. The
-    simulator (`sim_run`) and a real robot (`robot_run`) take the same hooks.
+    driver takes the same hooks on every backend.
     """
 
     wrap_reference: Callable[[PlannedReference, CommandLimits, Callable[[], RobotState | None]], ReferenceSource]
     caption: Callable[[], str] | None = None
     done: Callable[[], bool] | None = None
-
-
-def is_real_robot(hardware: str) -> bool:
-    """`hardware` names a real G1 over DDS (`simulated: false`): it runs through `robot_run`, with no simulator."""
-    from hw.dds.config import DdsHardwareConfig  # noqa: PLC0415
-    from hw.jointmap import load_robot_config  # noqa: PLC0415
-
-    config = load_robot_config(hardware)
-    return isinstance(config, DdsHardwareConfig) and not config.simulated

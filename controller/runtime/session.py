@@ -125,7 +125,7 @@ class Session:
         supervisor = self.supervisor
         report: dict[str, Any] = {
             "tracker": self.tracker.name,
-            "sim_seconds": round(self.backend.now() - self.start_time, 4),
+            "run_seconds": round(self.backend.now() - self.start_time, 4),
             "falls": len(self.falls),
             "fall_times": self.falls,
             "velocity_error_mean": round(self.metrics.velocity_error_mean, 4),

@@ -1,30 +1,39 @@
-"""Backends of `g1ctl sim`: the simulated G1 driven directly, or through simulated hardware.
+"""Backends on the simulated G1 in this process: driven directly, or through simulated hardware; and their builders.
 
-`DirectSimBackend`: the controller writes joint commands into MuJoCo's PD servos.
-`SimulatedHardwareBackend`: the controller drives a `HardwareRobot` over the codecs and
-buses of a hardware config, with firmware emulators and MuJoCo behind them; one bus cycle
-per physics step (500 Hz), in lockstep with simulated time.
+`DirectSimBackend`: the controller writes joint commands into MuJoCo's PD servos
+(`PerturbedSimBackend`: under perturbations). `SimulatedHardwareBackend`: the controller drives
+a `HardwareRobot` over the codecs and buses of a hardware config, with firmware emulators and
+MuJoCo behind them; one bus cycle per physics step (500 Hz), in lockstep with simulated time.
+`build_simulator` and `build_simulated_buses` make them from the plan of a run (the registry's
+`simulator` and `simulated-buses`); `simulated_world` is the G1 in MuJoCo they stand on.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from contextlib import ExitStack
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from controller.runtime.backend import Backend
+from controller.runtime.backend_registry import BuiltBackend
 from controller.runtime.hardware_backend import HardwareBackend
-from hw.emulation.faults import load_fault_file, load_faults
+from hw.emulation.faults import FaultFile, load_faults
 from hw.emulation.faulty_commands import FaultyCommands
 from hw.emulation.rig import SimulatedHardware
 from hw.hardware_robot import HardwareRobot, Lifecycle
-from hw.jointmap import load_hardware_config
+from hw.jointmap import HardwareConfig
 from hw.robot import RobotInterface
 from hw.types import RobotState
 from sim.hardware_twin import MuJoCoPlant
-from sim.perturbations import Perturbations, PerturbedRobot, PushForces, push_schedule
+from sim.perturbations import Perturbations, PerturbedRobot, PushForces, apply_to_model, push_schedule
 from sim.robot import SimRobot
+from sim.world import SceneConfig, build_model
+
+if TYPE_CHECKING:
+    from controller.assets import Assets
+    from controller.runtime.run_plan import RunPlan
 
 # The simulated robot starts in the default pose, so the soft start has nothing to ramp;
 # a long ramp would only let the un-balanced robot sag. Waiting on the emulators costs
@@ -94,16 +103,15 @@ class SimulatedHardwareBackend(HardwareBackend):
     """Hardware over virtual buses and pseudo-terminals, MuJoCo behind the emulators; the simulator is ground truth."""
 
     def __init__(
-        self, truth: SimRobot, hardware: str, faults: str | None = None, perturbations: Perturbations | None = None,
-        duration: float = 0.0, seed: int = 0,
+        self, truth: SimRobot, cfg: HardwareConfig, config_name: str, faults: FaultFile | None = None, faults_name: str = "",
+        perturbations: Perturbations | None = None, duration: float = 0.0, seed: int = 0,
     ) -> None:  # fmt: skip
-        """`faults`: a fault plan (name or path) the emulators and the controller's commands act out.
-        `perturbations`: pushes switched on each bus cycle (one physics step), the host seen and commanded through them.
-        `seed`: the run's, for the pushes and the IMU's noise."""
-        cfg = load_hardware_config(hardware)
-        plan = load_fault_file(faults) if faults else None
+        """`cfg`: the hardware config (`config_name`: as the run named it). `faults`: a fault plan (`faults_name`: its
+        name or path) the emulators and the controller's commands act out. `perturbations`: pushes switched on each bus
+        cycle (one physics step), the host seen and commanded through them. `seed`: the run's, for the pushes and the
+        IMU's noise."""
         imu_bus = cfg.imu.bus if cfg.imu is not None else None
-        plans = load_faults(plan, faults, list(cfg.buses), imu_bus) if plan is not None and faults is not None else None
+        plans = load_faults(faults, faults_name, list(cfg.buses), imu_bus) if faults is not None else None
         safety = dataclasses.replace(cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
         cfg = dataclasses.replace(cfg, safety=safety)
         self.sim = truth
@@ -114,14 +122,14 @@ class SimulatedHardwareBackend(HardwareBackend):
         except Exception:
             self.twin.close()
             raise
-        super().__init__(host, hardware, now=lambda: truth.time, after_cycle=self.twin.step)
+        super().__init__(host, config_name, now=lambda: truth.time, after_cycle=self.twin.step)
         rng = np.random.default_rng(seed)
         self.pushes = PushForces(truth, push_schedule(perturbations.pushes if perturbations else None, duration, rng))
         self._wrappers: list[RobotInterface] = []  # outermost last: the controller writes into it
         if perturbations is not None and perturbations.senses:
             self._wrappers.append(PerturbedRobot(host, perturbations, rng))
-        if plan is not None and plan.host.start_s is not None:
-            self._wrappers.append(FaultyCommands(self._wrappers[-1] if self._wrappers else host, plan.host, plant.time))
+        if faults is not None and faults.host.start_s is not None:
+            self._wrappers.append(FaultyCommands(self._wrappers[-1] if self._wrappers else host, faults.host, plant.time))
         if self._wrappers:
             self.robot = self._wrappers[-1]
 
@@ -159,3 +167,37 @@ class SimulatedHardwareBackend(HardwareBackend):
         finally:
             self.twin.close()
             self.sim.close()
+
+
+def simulated_world(plan: RunPlan, assets: Assets, stack: ExitStack) -> SimRobot:
+    """The G1 in MuJoCo on the plan's terrain, its perturbations (friction, payload, strength) in the model; closed by `stack`."""
+    perturbations = plan.perturbations
+    ground = perturbations.terrain_height_m if perturbations is not None else 0.0
+    world = SimRobot(build_model(assets.g1_mjcf, SceneConfig(terrain_height=ground, terrain_seed=plan.seed)))
+    stack.callback(world.close)
+    if perturbations is not None:
+        apply_to_model(world.model, perturbations)
+    return world
+
+
+def build_simulator(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBackend:
+    """The registry's `simulator`: MuJoCo commanded directly, under the plan's perturbations when there are any."""
+    world = simulated_world(plan, assets, stack)
+    if plan.perturbations is None:
+        backend: DirectSimBackend = stack.enter_context(DirectSimBackend(world))
+        return BuiltBackend(backend, world, world.joint_limits())
+    perturbed = stack.enter_context(PerturbedSimBackend(world, plan.perturbations, plan.duration or 0.0, plan.seed))
+    return BuiltBackend(perturbed, world, world.joint_limits(), pushes=perturbed.pushes)
+
+
+def build_simulated_buses(plan: RunPlan, assets: Assets, stack: ExitStack) -> BuiltBackend:
+    """The registry's `simulated-buses`: the plan's bus config over firmware emulators, MuJoCo behind them."""
+    if not isinstance(plan.hardware, HardwareConfig) or plan.hardware_name is None:
+        raise TypeError(f"simulated buses need a bus config, the plan has {type(plan.hardware).__name__}")
+    world = simulated_world(plan, assets, stack)
+    backend = SimulatedHardwareBackend(
+        world, plan.hardware, plan.hardware_name, plan.faults, plan.faults_name or "", plan.perturbations, plan.duration or 0.0,
+        plan.seed,
+    )  # fmt: skip
+    stack.enter_context(backend)
+    return BuiltBackend(backend, world, world.joint_limits(), pushes=backend.pushes)

@@ -1,13 +1,13 @@
 """`g1ctl plan PROMPT --sim|--hardware NAME`: a resolved program executed on the G1, with its text report.
 
-Build the `g1ctl sim` run (or, on a real G1, the `g1ctl run` one) with the planner in the loop,
+Build a run (`runtime/driver.py`, as `g1ctl sim` and `g1ctl run` do) with the planner in the loop,
 put a `TextReference` over the planned reference through the run's `RunHooks`, end the run once
 the last clause has ended and the robot has had a moment to come to rest, then add the text
 report (clauses, totals, order, transitions) to the run's report. On the simulator, directly or
 through simulated hardware (`hardware`), the run stands on the `stand` scenario and imports
-MuJoCo (through `sim_run`) when it starts; on a real G1 (`robot_run`, no MuJoCo) the robot's own
-remote is the input, so its E-stop stays in hand, and the current clause goes on the status
-line. The composed plan on paper (`composed_transition_score`) imports neither.
+MuJoCo (through the simulator's backend builders) when it starts; on a real G1 (no MuJoCo) the
+robot's own remote is the input, so its E-stop stays in hand, and the current clause goes on the
+status line. The composed plan on paper (`composed_transition_score`) imports neither.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controller.commands.velocity import CommandLimits
 from controller.reference.planned import PlannedReference
@@ -26,6 +26,9 @@ from controller.text.program import Program
 from controller.text.report import Detect, text_report
 from controller.tracking.presets import policy_rate_hz
 from hw.types import RobotState
+
+if TYPE_CHECKING:
+    from controller.runtime.backend_registry import BackendChoice
 
 SETTLE_S = 1.0  # the run goes on this long after the last clause
 MAX_SECONDS = 180.0
@@ -39,7 +42,8 @@ class TextSimConfig:
     report: Path | None = None
     progress: bool = False
     assets_dir: str | None = None
-    hardware: str | None = None  # through this hardware (simulated buses, the simulated G1 over DDS, a real G1); None: the simulator
+    # Through this hardware (simulated buses, the simulated G1 over DDS, a real G1), as `choose_backend` loaded it; None: the simulator
+    hardware: BackendChoice | None = None
     status: bool = False  # a live status line on stderr, with the clause running
     run: TextRunConfig = field(default_factory=TextRunConfig)
 
@@ -58,7 +62,10 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
 
     `text_embedding`: clause text -> the planner's text conditioning (None: the planner gets no text).
     """
-    from controller.runtime.run_config import RunHooks, SimRunConfig, is_real_robot  # noqa: PLC0415
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
+    from controller.runtime.driver import execute  # noqa: PLC0415
+    from controller.runtime.run_config import RunConfig, RunHooks  # noqa: PLC0415
+    from controller.runtime.run_plan import resolve_run  # noqa: PLC0415
 
     holder: list[TextReference] = []
 
@@ -71,20 +78,14 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
         caption=lambda: holder[0].caption if holder else "",
         done=lambda: bool(holder) and holder[0].finished_for(SETTLE_S),
     )
-    on_robot = cfg.hardware is not None and is_real_robot(cfg.hardware)
-    run_cfg = SimRunConfig(
+    choice = cfg.hardware or choose_backend(None)
+    on_robot = not choice.entry.simulated
+    run_cfg = RunConfig(
         scenario="stand", policy=cfg.policy, planner=True, duration=budget_seconds(program, cfg.run), seed=cfg.seed,
         input="unitree-remote" if on_robot else "scripted", video=cfg.video, report=None, plot=None, progress=cfg.progress,
-        assets_dir=cfg.assets_dir, hardware=cfg.hardware, status=cfg.status,
+        assets_dir=cfg.assets_dir, hardware=choice.hardware_name, status=cfg.status,
     )  # fmt: skip
-    if on_robot:
-        from controller.runtime.robot_run import run as run_robot  # noqa: PLC0415 - the g1 extra, no MuJoCo
-
-        report = run_robot(run_cfg, hooks)
-    else:
-        from controller.runtime.sim_run import run as run_sim  # noqa: PLC0415 - imports MuJoCo
-
-        report = run_sim(run_cfg, hooks)
+    report = execute(resolve_run(run_cfg, choice), hooks)
     reference = holder[0]
     text = text_report(reference, policy_rate_hz(cfg.policy), embed, detect)  # one executed frame per tick of the policy
     out = {"prompt": program.prompt} | text | {"falls": report["falls"], "run": report}

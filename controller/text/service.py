@@ -18,12 +18,15 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from controller.text.encoder import SentenceEncoder, shared_encoder
 from controller.text.gesture_detector import detect_gestures
 from controller.text.program import Program
 from controller.text.resolve import describe_program, plan_program
+
+if TYPE_CHECKING:
+    from controller.runtime.backend_registry import BackendChoice
 
 
 class TextPlanner:
@@ -56,10 +59,10 @@ class TextPlanner:
 
     def simulate(
         self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,
-        blend: bool = True, progress: bool = False, hardware: str | None = None, status: bool = False,
+        blend: bool = True, progress: bool = False, hardware: BackendChoice | None = None, status: bool = False,
     ) -> dict[str, Any]:  # fmt: skip
-        """Run `program` on the simulated G1 (through `hardware` when given, or on the real G1 it names): the text report,
-        with the run's report under "run"."""
+        """Run `program` on the simulated G1 (through `hardware` when given: its config as `choose_backend` loaded it, or on
+        the real G1 it names): the text report, with the run's report under "run"."""
         from controller.text.job import TextSimConfig, run_text_sim  # noqa: PLC0415
 
         cfg = TextSimConfig(policy=policy, seed=seed, video=video, report=report, progress=progress, hardware=hardware, status=status)

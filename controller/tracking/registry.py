@@ -56,6 +56,17 @@ def available_trackers() -> list[str]:
     return sorted(TRACKERS)
 
 
+def tracker_for(name: str | None, planner: bool) -> str:
+    """The tracker a run uses: `name` when given, else the one for its reference (planned motion or the command);
+    an unknown name, or a plan-following tracker in a run without the planner, is refused in one line."""
+    chosen = name or ("decoupled" if planner else "velocity")
+    if chosen not in TRACKERS:
+        raise ConfigError(f"unknown tracker '{chosen}' (valid: {', '.join(available_trackers())})")
+    if chosen in PLAN_FOLLOWING and not planner:
+        raise ConfigError(f"the {chosen} tracker follows planned whole-body motion: add --planner")
+    return chosen
+
+
 def make_tracker(name: str, spec: TrackerSpec) -> Tracker:
     try:
         factory = TRACKERS[name]

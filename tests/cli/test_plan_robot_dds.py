@@ -1,9 +1,9 @@
-"""`g1ctl plan --hardware` with a real robot's config: the text plan runs through `robot_run`, no simulator.
+"""`g1ctl plan --hardware` with a real robot's config: the text plan runs on the registry's `real-dds` backend, no simulator.
 
 As in test_run_robot.py, the G1 is `g1ctl robot --dds` started by hand and the config a copy of
 `g1-dds.yaml` pointed at loopback: the run knows nothing of a simulator, so only the controller's
 own view measures the plan. The stand-in hangs in its gantry, as a robot does at its first runs:
-what is tested is the job on `robot_run`, not balance on a wall clock that a loaded machine skips
+what is tested is the job on a robot, not balance on a wall clock that a loaded machine skips
 (standing free, 1 run in 6 fell at 0.9 s beside other test runs: 16 late bus cycles).
 """
 
@@ -53,6 +53,7 @@ def test_plan_runs_on_a_robot_that_answers_measured_by_its_own_view(tmp_path: Pa
     assert len(wave["displacement"]) == 2 and all(math.isfinite(v) for v in wave["displacement"])
     assert report["run"]["estimator"]["updates"] > 100 and "judged_by" not in report["run"]["estimator"]
     run = report["run"]
-    assert run["robot"].endswith("my-g1.yaml") and run["input"] == "unitree-remote"  # robot_run, the robot's remote in hand
+    assert run["hardware"].endswith("my-g1.yaml") and run["backend"] == "real-dds"  # a robot: no simulator behind it
+    assert run["input"] == "unitree-remote"  # the robot's remote in hand
     assert run["final_mode"] == "run" and run["hw"]["faults"] == 0
-    assert run["sim_seconds"] < 3.0 + 2.5  # the wave's 3 s and the settling: the job ended the run, not its budget (10.5 s)
+    assert run["run_seconds"] < 3.0 + 2.5  # the wave's 3 s and the settling: the job ended the run, not its budget (10.5 s)

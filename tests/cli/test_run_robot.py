@@ -36,7 +36,7 @@ def test_run_drives_a_robot_that_answers_on_the_configs_domain(tmp_path: Path, c
         robot.send_signal(signal.SIGTERM)
         out, err = robot.communicate(timeout=20)
     report = json.loads(report_path.read_text())
-    assert report["final_mode"] == "run" and report["falls"] == 0 and report["sim_seconds"] == pytest.approx(4.0, abs=0.1)
+    assert report["final_mode"] == "run" and report["falls"] == 0 and report["run_seconds"] == pytest.approx(4.0, abs=0.1)
     hw = report["hw"]
     # 500 Hz for 4 s is 2000 cycles; a loaded machine takes fewer (1344 commands beside another test run): half
     assert hw["released_mode"] == "ai" and hw["faults"] == 0 and hw["cycles"] > 1000 and hw["crc_errors"] == 0
@@ -58,7 +58,8 @@ def test_sim_refuses_a_real_robot_in_one_line(tmp_path: Path, claim_dds_domain: 
 def test_a_robot_run_imports_no_simulator() -> None:
     """`g1ctl run` and `g1ctl plan` on a real robot: the run, its state estimator and the text job load no MuJoCo."""
     code = (
-        "import sys; import controller.runtime.robot_run, controller.cli.sim, controller.cli.run, controller.cli.plan, "
+        "import sys; import controller.runtime.driver, controller.runtime.dds_backend, controller.runtime.run_plan, "
+        "controller.runtime.backend_registry, controller.cli.sim, controller.cli.run, controller.cli.plan, "
         "controller.text.job, controller.text.service, controller.runtime.estimation; "
         "assert 'mujoco' not in sys.modules and 'sim.robot' not in sys.modules, sorted(m for m in sys.modules if 'mujoco' in m)"
     )

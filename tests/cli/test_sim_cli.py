@@ -17,7 +17,7 @@ def test_five_seconds_of_walking(tmp_path: Path) -> None:
     result = g1ctl("sim", "--scenario", "walk_turn_stop", "--duration", "5", "--report", str(report_path))
     assert result.returncode == 0, result.stderr
     report = json.loads(report_path.read_text())
-    assert report["sim_seconds"] == pytest.approx(5.0)
+    assert report["run_seconds"] == pytest.approx(5.0)
     assert report["falls"] == 0
     assert report["final_base_position"][0] > 1.0  # 4 s at 0.5 m/s forward
     assert report["overruns"] == 0 and report["nonfinite_actions"] == 0

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.runtime.run_config import SimRunConfig
-from controller.runtime.sim_run import run
+from controller.runtime.driver import run
+from controller.runtime.run_config import RunConfig
 from hw import g1
 from hw.errors import ConfigError
 from hw.types import JointCommand
@@ -88,9 +88,9 @@ def test_latency_gains_noise_and_drops_sit_between_robot_and_controller(assets: 
 def test_a_hard_push_topples_the_robot_and_the_same_seed_gives_the_same_run(tmp_path: Path) -> None:
     hard = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.5))
     gentle = Perturbations(pushes=Pushes(force_n=60.0, duration_s=0.1, interval_s=2.0, start_s=1.5))
-    falls = run(SimRunConfig(duration=4.0, perturbations=hard))
-    calm = run(SimRunConfig(duration=4.0, perturbations=gentle, seed=3))
-    again = run(SimRunConfig(duration=4.0, perturbations=gentle, seed=3))
+    falls = run(RunConfig(duration=4.0, perturbations=hard))
+    calm = run(RunConfig(duration=4.0, perturbations=gentle, seed=3))
+    again = run(RunConfig(duration=4.0, perturbations=gentle, seed=3))
     assert falls["falls"] >= 1 and calm["falls"] == 0
     assert calm["pushes"] == again["pushes"] and calm["final_base_position"] == again["final_base_position"]
     assert calm["push_impulse_ns"] == pytest.approx(6.0) and calm["perturbations"]["pushes"]["force_n"] == 60.0
@@ -137,7 +137,7 @@ def test_a_suite_condition_with_ranges_draws_per_episode_and_stays_off_the_push_
 @pytest.mark.slow  # a run through the simulated CAN buses
 def test_perturbations_reach_a_run_through_simulated_hardware() -> None:
     shove = Perturbations(pushes=Pushes(force_n=900.0, duration_s=0.1, interval_s=2.0, start_s=1.0), latency_ticks=1, joint_noise_rad=0.005)
-    report = run(SimRunConfig(duration=3.0, hardware="sim-can", perturbations=shove))
+    report = run(RunConfig(duration=3.0, hardware="sim-can", perturbations=shove))
     assert report["falls"] == 1 and report["pushes"][0]["start"] == 1.0  # on hardware a fall ends the run
     assert report["hw"]["faults"] == 0 and report["perturbations"]["latency_ticks"] == 1
 

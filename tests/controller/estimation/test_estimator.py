@@ -12,8 +12,9 @@ import pytest
 
 from controller.estimation.config import default_estimator_config_path, load_estimator_config
 from controller.estimation.estimator import StateEstimator
-from controller.runtime import sim_run
-from controller.runtime.run_config import SimRunConfig
+from controller.runtime import driver
+from controller.runtime.run_config import RunConfig
+from controller.runtime.run_plan import resolve_run
 from hw.errors import ConfigError
 from hw.g1 import JOINT_NAMES
 from hw.types import RobotState
@@ -25,21 +26,23 @@ Row = tuple[RobotState, RobotState, tuple[bool, bool]]  # measured, truth, the s
 @pytest.fixture(scope="module")
 def walk() -> tuple[tuple[str, ...], list[Row]]:
     """8 s of walk_turn_stop on the simulator (forward, then turning in place): each tick's state, truth and contacts."""
-    cfg = SimRunConfig(scenario="walk_turn_stop", duration=8.0)
+    plan = resolve_run(RunConfig(scenario="walk_turn_stop", duration=8.0))
     rows: list[Row] = []
     with ExitStack() as stack:
-        built = sim_run._build(cfg, 8.0, stack)
+        built = driver.build(plan, stack)
+        world = built.robot_side.world
+        assert world is not None
         robot = built.session.backend.robot
         read = robot.read
 
         def recording_read() -> RobotState:
             state = read()
             if not rows or state.time > rows[-1][0].time:  # the session's read, not the truth's of the same tick
-                rows.append((state, SimRobot.read(built.robot), built.robot.foot_contacts()))
+                rows.append((state, SimRobot.read(world), world.foot_contacts()))
             return state
 
         robot.read = recording_read  # type: ignore[method-assign]
-        sim_run._drive(built, 8.0)
+        driver.drive(built)
         return robot.joint_names, rows
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from controller.estimation.estimator import StateEstimator
-from controller.runtime.run_config import SimRunConfig
-from controller.runtime.sim_run import run
+from controller.runtime.driver import run
+from controller.runtime.run_config import RunConfig
 from hw import g1
 from hw.types import RobotState
 from sim.perturbations import Perturbations
@@ -74,9 +74,9 @@ def test_a_non_finite_input_latches_and_the_last_good_estimate_stays() -> None:
 @pytest.mark.slow
 def test_a_slippery_floor_holds_the_waypoints_standing_and_a_normal_floor_does_not() -> None:
     """On the simulator with the estimator: a third of the friction makes the stance feet slide within a second or two."""
-    slippery = run(SimRunConfig(scenario="waypoints", duration=3.0, estimator=True, perturbations=Perturbations(friction_scale=0.3)))
+    slippery = run(RunConfig(scenario="waypoints", duration=3.0, estimator=True, perturbations=Perturbations(friction_scale=0.3)))
     assert slippery["final_mode"] == "stand" and "feet slipping" in slippery["hold_reason"]
     assert slippery["hold_time"] < 3.0
-    normal = run(SimRunConfig(scenario="waypoints", duration=6.0, estimator=True))
+    normal = run(RunConfig(scenario="waypoints", duration=6.0, estimator=True))
     assert normal["final_mode"] == "run" and normal["hold_reason"] is None and normal["estimator"]["fault"] is None
     assert normal["falls"] == 0

@@ -18,8 +18,10 @@ from controller.commands.velocity import CommandLimits, VelocityCommand
 from controller.inputs.base import Buttons, CommandSample, CommandSource
 from controller.inputs.registry import REMOTE_NEEDS_DDS, check_input, open_input
 from controller.inputs.unitree_remote import RemoteConfig, map_remote, remote_bytes
+from hw.dds.config import DdsHardwareConfig
 from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
+from hw.jointmap import load_robot_config
 from hw.protocols import unitree_hg as hg
 from tests.conftest import HANG_S, wait_for
 
@@ -65,13 +67,22 @@ def test_a_command_beyond_the_limits_saturates_the_stick_and_a_dead_input_centre
 
 
 def test_the_remote_needs_a_dds_hardware_config() -> None:
-    for hardware in (None, "sim-can"):
+    from controller.runtime.run_config import RunConfig
+    from controller.runtime.run_plan import resolve_run
+
+    for hardware in (None, "sim-can"):  # a run on the simulator, or on buses: no robot over DDS to read the remote from
         with pytest.raises(ConfigError) as info:
-            check_input("unitree-remote", hardware)
+            resolve_run(RunConfig(input="unitree-remote", hardware=hardware))
         assert str(info.value) == REMOTE_NEEDS_DDS
+    with pytest.raises(ConfigError) as info:
+        check_input("unitree-remote", None)
+    assert str(info.value) == REMOTE_NEEDS_DDS
     with pytest.raises(ConfigError, match="add --hardware g1-dds"):
-        open_input("unitree-remote", LIMITS, "stand", 0.0, 0)
-    check_input("unitree-remote", "sim-dds")
+        open_input("unitree-remote", LIMITS, None, 0.0, 0)
+    sim_dds = load_robot_config("sim-dds")
+    assert isinstance(sim_dds, DdsHardwareConfig)
+    check_input("unitree-remote", sim_dds.dds)
+    assert resolve_run(RunConfig(input="unitree-remote", hardware="sim-dds")).input == "unitree-remote"
     check_input("gamepad")
 
 
@@ -139,7 +150,9 @@ def test_open_input_reads_the_remote_on_the_hardware_configs_domain(tmp_path: Pa
 
     hardware = tmp_path / "remote-dds.yaml"
     hardware.write_text((config_dir("hardware") / "sim-dds.yaml").read_text().replace("domain: 1,", f"domain: {domain},"))
-    with open_input("unitree-remote", LIMITS, "stand", 0.0, 0, str(hardware)) as source:
+    config = load_robot_config(str(hardware))
+    assert isinstance(config, DdsHardwareConfig)
+    with open_input("unitree-remote", LIMITS, None, 0.0, 0, config.dds) as source:
         assert isinstance(source, UnitreeRemoteSource) and source._session.cfg.domain == domain
         assert not source.poll(0.0).alive  # no robot on this domain
 

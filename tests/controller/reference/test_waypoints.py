@@ -201,9 +201,10 @@ def test_the_shipped_scenario_is_a_square_of_poses_back_to_the_start() -> None:
 @pytest.mark.slow
 @pytest.mark.skipif(not (model_dir("planner") / "planner.onnx").is_file(), reason="no shipped planner model")
 def test_the_square_with_the_planner_in_the_loop() -> None:
-    from controller.runtime.sim_run import SimRunConfig, run  # MuJoCo and the planner: this test only
+    from controller.runtime.driver import run  # MuJoCo and the planner: this test only
+    from controller.runtime.run_config import RunConfig
 
-    report = run(SimRunConfig(scenario="waypoints", planner=True, duration=36.0))
+    report = run(RunConfig(scenario="waypoints", planner=True, duration=36.0))
     assert report["falls"] == 0 and report["planner_failures"] == 0
     assert report["waypoints_reached"] == 4
     for error in report["waypoint_errors"]:

@@ -14,10 +14,11 @@ from controller.commands.waypoints import WorldWaypoint
 from controller.estimation.estimator import StateEstimator
 from controller.inputs.scripted import ScenarioStep, ScriptedSource
 from controller.reference.waypoints import WaypointFollower, WaypointReference
+from controller.runtime.driver import run
 from controller.runtime.estimation import EstimatedRobot
+from controller.runtime.run_config import RunConfig
 from controller.runtime.session import Session
 from controller.runtime.sim_backends import DirectSimBackend
-from controller.runtime.sim_run import SimRunConfig, run
 from controller.tracking.presets import load_policy
 from controller.tracking.registry import TrackerSpec, available_trackers, make_tracker
 from hw.errors import ConfigError, RunAborted
@@ -51,7 +52,7 @@ def test_ticks_track_and_count(g1_model, assets, tmp_path: Path, linear_onnx) ->
             assert session.tick()
         report = session.report()
     assert report["tracker"] == "velocity" and report["final_mode"] == "run" and report["damp_time"] is None
-    assert report["sim_seconds"] == pytest.approx(24 / 50, abs=1e-6)
+    assert report["run_seconds"] == pytest.approx(24 / 50, abs=1e-6)
     assert len(session.step_times) == 25 and set(report["policy_step_ms"]) == {"p50", "p99"}
     assert "hw" not in report
 
@@ -90,10 +91,10 @@ def test_an_error_mid_run_still_writes_the_report_and_plot(tmp_path: Path, monke
     monkeypatch.setattr(SimRobot, "step_until", step_until)
     report_path = tmp_path / "r.json"
     with pytest.raises(RunAborted, match=r"run aborted after 0\.4[0-9]* s: injected: the simulator stopped; report: "):
-        run(SimRunConfig(duration=2.0, report=report_path))
+        run(RunConfig(duration=2.0, report=report_path))
     report = json.loads(report_path.read_text())
     assert report["error"] == "RuntimeError: injected: the simulator stopped"
-    assert report["sim_seconds"] == pytest.approx(0.5, abs=0.03) and report["falls"] == 0
+    assert report["run_seconds"] == pytest.approx(0.5, abs=0.03) and report["falls"] == 0
     assert report_path.with_suffix(".png").stat().st_size > 10_000
 
 

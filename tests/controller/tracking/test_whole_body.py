@@ -393,9 +393,10 @@ def test_real_holosoma_exports_load_and_act(assets) -> None:
 
 def test_real_policy_stands_and_waves_with_the_planner() -> None:
     """The default preset (wbt_fastsac) on the shipped `wave` scenario, first 6 s: standing, the right hand waving."""
-    from controller.runtime.sim_run import SimRunConfig, run
+    from controller.runtime.driver import run
+    from controller.runtime.run_config import RunConfig
 
-    report = run(SimRunConfig(scenario="wave", planner=True, tracker="whole-body", duration=6.0))
+    report = run(RunConfig(scenario="wave", planner=True, tracker="whole-body", duration=6.0))
     assert report["tracker"] == "whole-body"
     assert report["falls"] == 0 and report["final_mode"] != "damp"
     assert report["nonfinite_actions"] == 0
@@ -404,7 +405,8 @@ def test_real_policy_stands_and_waves_with_the_planner() -> None:
 
 
 def test_without_the_planner_the_run_is_refused_before_it_starts() -> None:
-    from controller.runtime.sim_run import SimRunConfig, run
+    from controller.runtime.driver import run
+    from controller.runtime.run_config import RunConfig
 
     with pytest.raises(ConfigError, match="the whole-body tracker follows planned whole-body motion: add --planner"):
-        run(SimRunConfig(tracker="whole-body", duration=0.1))
+        run(RunConfig(tracker="whole-body", duration=0.1))
