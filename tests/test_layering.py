@@ -58,7 +58,7 @@ CONTROLLER_LAYERS: tuple[tuple[str, ...], ...] = (
     ("assets", "reports", "onnx_session"),  # controller/'s top-level modules
     ("commands", "planner", "estimation"),  # the command vocabulary; the planner contract and its runtime; the state estimator
     ("inputs", "motion_data", "reference"),  # command sources; the motion dataset; what a tracker follows
-    ("tracking",),  # trackers: reference window in, joint command out
+    ("tracking", "recording"),  # trackers: reference window in, joint command out; the flight recorder and its readers
     ("runtime",),  # sessions, backends, whole sim and robot runs
     ("eval", "text"),  # applications that drive runs: suites and the dataset recorder; prompts run as programs
     ("training",),

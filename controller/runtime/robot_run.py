@@ -95,7 +95,8 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
             stack.callback(planned.close)
             reference = planned if hooks is None else hooks.wrap_reference(planned, tracker.command_limits, backend.truth)
         estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)  # a robot: always
-        session = Session(backend, tracker, source, reference, estimated)
+        session = Session(backend, tracker, source, reference, estimated, cfg.record)
+        stack.callback(session.close)
         status = StatusLine(sys.stderr) if cfg.status else None
         loop = RateLoop(SimulationClock(backend.now, backend.advance_to), tracker.rate_hz)
         caption = hooks.caption if hooks is not None else None
@@ -125,6 +126,7 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
         if error is not None:
             report["error"] = f"{type(error).__name__}: {error}"
     report["hw"] = backend.report()  # after closing: the counters include the damped shutdown
+    report |= session.recorder_report()  # after closing: the file is finished
     if cfg.report is not None:
         write_report(report, cfg.report)
     if error is not None:

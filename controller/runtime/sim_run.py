@@ -102,6 +102,7 @@ def run(cfg: SimRunConfig, hooks: RunHooks | None = None) -> dict[str, Any]:
             report["picture"] = str(cfg.picture)
         if built.recorder is not None:
             report["video"] = str(cfg.video)
+    report |= built.session.recorder_report()  # after closing: the file is finished
     hw = built.session.backend.report()  # after closing: the counters include the damped shutdown
     if hw is not None:
         report["hw"] = hw
@@ -162,7 +163,8 @@ def _build(cfg: SimRunConfig, duration: float | None, stack: ExitStack, hooks: R
     elif follower is not None:
         reference = WaypointReference(follower)
     estimated = attach_estimator(backend, cfg.estimator, cfg.estimator_config, cfg.assets_dir)
-    session = Session(backend, tracker, source, reference, estimated)
+    session = Session(backend, tracker, source, reference, estimated, cfg.record)
+    stack.callback(session.close)
     ghost = None
     if viewer is not None and reference is not None:
         from sim.render import Ghost  # noqa: PLC0415

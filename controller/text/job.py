@@ -41,6 +41,7 @@ class TextSimConfig:
     assets_dir: str | None = None
     hardware: str | None = None  # through this hardware (simulated buses, the simulated G1 over DDS, a real G1); None: the simulator
     status: bool = False  # a live status line on stderr, with the clause running
+    record: Path | None = None  # an MCAP file that records every tick of the run
     run: TextRunConfig = field(default_factory=TextRunConfig)
 
 
@@ -75,7 +76,7 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     run_cfg = SimRunConfig(
         scenario="stand", policy=cfg.policy, planner=True, duration=budget_seconds(program, cfg.run), seed=cfg.seed,
         input="unitree-remote" if on_robot else "scripted", video=cfg.video, report=None, plot=None, progress=cfg.progress,
-        assets_dir=cfg.assets_dir, hardware=cfg.hardware, status=cfg.status,
+        assets_dir=cfg.assets_dir, hardware=cfg.hardware, status=cfg.status, record=cfg.record,
     )  # fmt: skip
     if on_robot:
         from controller.runtime.robot_run import run as run_robot  # noqa: PLC0415 - the g1 extra, no MuJoCo
