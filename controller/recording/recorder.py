@@ -14,7 +14,7 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import IO, Any, Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from controller.estimation.estimator import StateEstimator
 from controller.recording import foxglove, topics
@@ -56,12 +56,10 @@ class FlightRecorder:
 
     def __init__(
         self, path: Path, robot: RobotInterface, estimator: StateEstimator | None, run: dict[str, Any], queue_items: int = QUEUE_ITEMS,
-        stream: IO[bytes] | None = None,
     ) -> None:  # fmt: skip
         """Start recording to `path` (ConfigError when it cannot be written); `run` describes the run in the file's metadata.
 
-        `robot` is the backend's (its counters, where it is a hardware robot), `estimator` the state estimator where one runs;
-        `stream` replaces the file (tests: a slow disk)."""
+        `robot` is the backend's (its counters, where it is a hardware robot), `estimator` the state estimator where one runs."""
         self.joint_names = tuple(robot.joint_names)
         self._counted = robot if isinstance(robot, CountedRobot) else None
         self._estimator = estimator
@@ -74,7 +72,7 @@ class FlightRecorder:
         self.call_seconds: list[float] = []  # what `record` cost the tick
         metadata = {"format": FORMAT, "joint_names": json.dumps(self.joint_names), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         metadata |= {key: value if isinstance(value, str) else json.dumps(value) for key, value in run.items()}
-        self.sink = McapSink(path, self._encode, metadata, queue_items, stream)  # last: its thread starts here
+        self.sink = McapSink(path, self._encode, metadata, queue_items)  # last: its thread starts here
 
     # -- the loop's side ------------------------------------------------------------------
     def record(self, tick: Tick) -> None:

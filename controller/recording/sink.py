@@ -52,20 +52,23 @@ Message = tuple[Topic, int, bytes]
 
 
 def check_record_path(path: Path) -> None:
-    """Refuse, before anything starts, a recording that could not be written: the suffix, a folder in the way, no write access."""
-    import os  # noqa: PLC0415
+    """Refuse, before anything starts, a recording that could not be written: the suffix, a folder in the way, no write access.
 
+    The file is opened for appending and closed (and removed again when it was not there): the system says
+    whether it can be written, whoever runs this. The folders to it are made, as for a report."""
     if path.suffix.lower() != ".mcap":
         raise ConfigError(f"--record {path}: a recording is an MCAP file, name it *.mcap")
     if path.is_dir():
         raise ConfigError(f"--record {path}: that is a folder; give a file name ending in .mcap")
-    folder = path.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent  # the folders that do not exist yet are made when the recording opens
-    if path.exists() and not os.access(path, os.W_OK):
-        raise ConfigError(f"--record {path}: the file exists and cannot be written; choose another path")
-    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
-        raise ConfigError(f"--record {path}: cannot write in {folder} ({'not a folder' if not folder.is_dir() else 'no write access'})")
+    existed = path.exists()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "ab"):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"--record {path}: cannot write it ({exc.strerror or exc}); choose a writable path") from exc
+    if not existed:
+        path.unlink()
 
 
 class McapSink:
@@ -73,17 +76,18 @@ class McapSink:
 
     def __init__(
         self, path: Path, encode: Callable[[Any], Iterable[Message]], metadata: dict[str, str], queue_items: int = QUEUE_ITEMS,
-        stream: IO[bytes] | None = None,
+        chunk_seconds: float = CHUNK_SECONDS,
     ) -> None:  # fmt: skip
-        """`encode` turns an offered item into messages, on the writer thread; `stream` replaces the file (tests: a slow disk)."""
+        """`encode` turns an offered item into messages, on the writer thread."""
         from mcap.writer import CompressionType, Writer  # noqa: PLC0415 - the recorder's dependencies load only when recording
 
         self.path = path
         self._encode = encode
-        check_record_path(path)
+        if path.suffix.lower() != ".mcap":
+            raise ConfigError(f"--record {path}: a recording is an MCAP file, name it *.mcap")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            self._file: IO[bytes] = stream if stream is not None else open(path, "wb")  # noqa: SIM115 - closed by close()
+            self._file: IO[bytes] = open(path, "wb")  # noqa: SIM115 - closed by close()
         except OSError as exc:
             raise ConfigError(f"--record {path}: cannot write it ({exc.strerror or exc}); choose a writable path") from exc
         self._writer = Writer(self._file, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
@@ -91,6 +95,7 @@ class McapSink:
         self._writer.add_metadata("run", metadata)
         self._channels: dict[str, int] = {}
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_items)
+        self._chunk_seconds = chunk_seconds
         self.offered = 0  # items the loop offered
         self.drops = 0  # of those, dropped: the queue was full (or the writer had stopped)
         self.messages = 0  # messages written
@@ -121,11 +126,12 @@ class McapSink:
                 for topic, log_time, data in self._encode(item):
                     self._writer.add_message(self._channel(topic), log_time, data, publish_time=log_time)
                     self.messages += 1
-                if time.monotonic() - last_chunk >= CHUNK_SECONDS:
+                if time.monotonic() - last_chunk >= self._chunk_seconds:
                     self._writer.flush()  # ends the chunk: on disk, readable, should the process die now
                     last_chunk = time.monotonic()
         except Exception as exc:  # the recording stops, the run goes on; the report says why
             self.error = f"{type(exc).__name__}: {exc}"
+            self.drops += 1  # the item being written
             log.error("flight recorder stopped writing %s: %s", self.path, self.error)
             self._drain()
         try:
