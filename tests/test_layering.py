@@ -26,13 +26,15 @@ PACKAGES = ("controller", "hw", "sim")
 MUJOCO_FOLDERS = ("sim", "controller/bench")
 TORCH_FOLDERS = ("controller/training",)
 
-# The hardware run path: what `g1ctl hw ...` and a hardware session load.
+# The hardware run path: what `g1ctl hw ...` and a hardware session load (its recording included).
 HARDWARE_PATH_MODULES = (
     "controller.runtime.hardware",
     "controller.runtime.loop",
     "controller.runtime.supervisor",
     "controller.cli.main",
     "controller.cli.hw",
+    "controller.runtime.session",
+    "controller.recording.recorder",  # `--record` on a robot's run: the loop's side, its writer thread, the topics
 )
 # Folders whose every module must load without mujoco or torch (reference: where it exists).
 SIM_FREE_FOLDERS = (
