@@ -78,13 +78,30 @@ class FlightRecorder:
     def record(self, tick: Tick) -> None:
         """Copy what the tick read, decided and sent, and queue it; never waits."""
         start = time.perf_counter()
+        logs = self._events(tick)
+        payloads = _payloads(tick)
+        if tick.truth is not None:
+            payloads["truth"] = _base(tick.truth)
+        estimator = self._estimator
+        if estimator is not None:
+            payloads["estimate"] = _base(tick.state) | {"contacts": list(estimator.contacts), "position_std": float(estimator.position_std)}
         t = tick.state.time
-        reading, window, command, sample = tick.reading, tick.window, tick.command, tick.sample
+        if logs or t >= self._next_counters:
+            self._next_counters = t + COUNTERS_PERIOD_S
+            payloads |= self._counters()
+        reading = tick.reading
+        joints = (reading.joint_pos.tolist(), reading.joint_vel.tolist(), None if reading.joint_tau is None else reading.joint_tau.tolist())
+        self.sink.offer(_Item(t, payloads, joints, _frames(tick), logs))
+        self.ticks += 1
+        self.call_seconds.append(time.perf_counter() - start)
+
+    def _events(self, tick: Tick) -> list[tuple[int, str, str]]:
+        """The /log lines of this tick: a mode change (a warning unless to run), a fault, a fall, an estimate given up."""
         logs, self._pending = self._pending, []
         if tick.mode != self._mode:
-            level = ERROR if tick.mode == "damp" and tick.reason.startswith("fault") else WARNING if tick.reason else INFO
             was = f"{self._mode} -> " if self._mode else ""
-            logs.append((level, "supervisor", f"mode {was}{tick.mode}" + (f": {tick.reason}" if tick.reason else "")))
+            text = f"mode {was}{tick.mode}" + (f": {tick.reason}" if tick.reason else "")
+            logs.append((INFO if tick.mode == "run" else WARNING, "supervisor", text))
             self._mode = tick.mode
         if tick.fault != self._fault:
             if tick.fault is not None:
@@ -92,52 +109,12 @@ class FlightRecorder:
             self._fault = tick.fault
         if tick.fell:
             logs.append((ERROR, "session", "the robot fell"))
-        payloads: dict[str, Any] = {
-            "state": {
-                "time": float(reading.time), "base_quat": reading.base_quat.tolist(), "base_ang_vel": reading.base_ang_vel.tolist(),
-                "imu_accel": None if reading.imu_accel is None else reading.imu_accel.tolist(), "base_pos": reading.base_pos.tolist(),
-                "base_lin_vel": reading.base_lin_vel.tolist(), "has_base_position": bool(reading.has_base_position),
-            },
-            "command": {
-                "q": command.q.tolist(), "dq": command.dq.tolist(), "kp": command.kp.tolist(), "kd": command.kd.tolist(),
-                "tau_ff": command.tau_ff.tolist(),
-            },
-            "reference": {
-                "time": float(window.time), "velocity": _velocity(*_triple(window.velocity)),
-                "path_velocity": None if window.path_velocity is None else _velocity(*_triple(window.path_velocity)),
-                "plan": _sample(window.plan), "ahead": _sample(window.ahead),
-            },
-            "input": {
-                "velocity": _velocity(*_triple(sample.velocity)), "start": sample.buttons.start, "stop": sample.buttons.stop,
-                "estop": sample.buttons.estop, "alive": sample.alive, "gesture": sample.gesture,
-            },
-            "supervisor": {"mode": tick.mode, "reason": tick.reason, "fault": tick.fault},
-            "tracking": {
-                "commanded": _velocity(*_triple(tick.velocity)),
-                "measured": None if tick.measured_velocity is None else _velocity(*tick.measured_velocity),
-            },
-        }  # fmt: skip
-        frames: list[tuple[str, list[float], list[float]]] = []
-        if tick.truth is not None:
-            frames.append((foxglove.PELVIS, tick.truth.base_pos.tolist(), tick.truth.base_quat.tolist()))
-            payloads["truth"] = _base(tick.truth)
-        if tick.state.has_base_position:
-            seen = foxglove.PELVIS_ESTIMATE if tick.truth is not None else foxglove.PELVIS
-            frames.append((seen, tick.state.base_pos.tolist(), tick.state.base_quat.tolist()))
         estimator = self._estimator
-        if estimator is not None:
-            payloads["estimate"] = _base(tick.state) | {"contacts": list(estimator.contacts), "position_std": float(estimator.position_std)}
-            if estimator.fault != self._estimate_fault:
-                self._estimate_fault = estimator.fault
-                if estimator.fault is not None:
-                    logs.append((ERROR, "estimator", f"state estimate lost: {estimator.fault}"))
-        if logs or t >= self._next_counters:
-            self._next_counters = t + COUNTERS_PERIOD_S
-            payloads |= self._counters()
-        joints = (reading.joint_pos.tolist(), reading.joint_vel.tolist(), None if reading.joint_tau is None else reading.joint_tau.tolist())
-        self.sink.offer(_Item(t, payloads, joints, frames, logs))
-        self.ticks += 1
-        self.call_seconds.append(time.perf_counter() - start)
+        if estimator is not None and estimator.fault != self._estimate_fault:
+            self._estimate_fault = estimator.fault
+            if estimator.fault is not None:
+                logs.append((ERROR, "estimator", f"state estimate lost: {estimator.fault}"))
+        return logs
 
     def note(self, source: str, text: str, level: int = ERROR) -> None:
         """A line said outside a tick (a fault at bring-up): written with the next tick, or on its own at `close`."""
@@ -177,6 +154,47 @@ class FlightRecorder:
             messages.append((topics.TF, ns, foxglove.frame_transforms(item.time, item.frames)))
         messages += [(topics.LOG, ns, foxglove.log(item.time, level, source, text)) for level, source, text in item.logs]
         return messages
+
+
+def _payloads(tick: Tick) -> dict[str, Any]:
+    """The per-tick topics every run has, as plain values (copies: the writer reads them later)."""
+    reading, window, command, sample = tick.reading, tick.window, tick.command, tick.sample
+    return {
+        "state": {
+            "time": float(reading.time), "base_quat": reading.base_quat.tolist(), "base_ang_vel": reading.base_ang_vel.tolist(),
+            "imu_accel": None if reading.imu_accel is None else reading.imu_accel.tolist(), "base_pos": reading.base_pos.tolist(),
+            "base_lin_vel": reading.base_lin_vel.tolist(), "has_base_position": bool(reading.has_base_position),
+        },
+        "command": {
+            "q": command.q.tolist(), "dq": command.dq.tolist(), "kp": command.kp.tolist(), "kd": command.kd.tolist(),
+            "tau_ff": command.tau_ff.tolist(),
+        },
+        "reference": {
+            "time": float(window.time), "velocity": _velocity(*_triple(window.velocity)),
+            "path_velocity": None if window.path_velocity is None else _velocity(*_triple(window.path_velocity)),
+            "plan": _sample(window.plan), "ahead": _sample(window.ahead),
+        },
+        "input": {
+            "velocity": _velocity(*_triple(sample.velocity)), "start": sample.buttons.start, "stop": sample.buttons.stop,
+            "estop": sample.buttons.estop, "alive": sample.alive, "gesture": sample.gesture,
+        },
+        "supervisor": {"mode": tick.mode, "reason": tick.reason, "fault": tick.fault},
+        "tracking": {
+            "commanded": _velocity(*_triple(tick.velocity)),
+            "measured": None if tick.measured_velocity is None else _velocity(*tick.measured_velocity),
+        },
+    }  # fmt: skip
+
+
+def _frames(tick: Tick) -> list[tuple[str, list[float], list[float]]]:
+    """World -> pelvis by the truth where there is one, else as the controller saw it; beside a truth, what it saw."""
+    frames = []
+    if tick.truth is not None:
+        frames.append((foxglove.PELVIS, tick.truth.base_pos.tolist(), tick.truth.base_quat.tolist()))
+    if tick.state.has_base_position:
+        seen = foxglove.PELVIS_ESTIMATE if tick.truth is not None else foxglove.PELVIS
+        frames.append((seen, tick.state.base_pos.tolist(), tick.state.base_quat.tolist()))
+    return frames
 
 
 def _velocity(vx: float, vy: float, yaw_rate: float) -> dict[str, float]:

@@ -29,6 +29,7 @@ log = logging.getLogger(__name__)
 QUEUE_ITEMS = 500  # ticks: 10 s at 50 Hz before the loop would have to drop
 CHUNK_BYTES = 1 << 20  # a chunk ends at this size (uncompressed) ...
 CHUNK_SECONDS = 1.0  # ... or this long after the last one, whichever comes first
+BATCH_SECONDS = 0.1  # once caught up, the writer waits this long for more: a wake-up every few ticks, not every one
 CLOSE_TIMEOUT_S = 30.0  # for the thread to drain the queue and finish the file
 PROFILE = "g1ctl"
 
@@ -76,7 +77,7 @@ class McapSink:
 
     def __init__(
         self, path: Path, encode: Callable[[Any], Iterable[Message]], metadata: dict[str, str], queue_items: int = QUEUE_ITEMS,
-        chunk_seconds: float = CHUNK_SECONDS,
+        chunk_seconds: float = CHUNK_SECONDS, batch_seconds: float = BATCH_SECONDS,
     ) -> None:  # fmt: skip
         """`encode` turns an offered item into messages, on the writer thread."""
         from mcap.writer import CompressionType, Writer  # noqa: PLC0415 - the recorder's dependencies load only when recording
@@ -96,6 +97,7 @@ class McapSink:
         self._channels: dict[str, int] = {}
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_items)
         self._chunk_seconds = chunk_seconds
+        self._batch_seconds = batch_seconds
         self.offered = 0  # items the loop offered
         self.drops = 0  # of those, dropped: the queue was full (or the writer had stopped)
         self.messages = 0  # messages written
@@ -126,6 +128,8 @@ class McapSink:
                 for topic, log_time, data in self._encode(item):
                     self._writer.add_message(self._channel(topic), log_time, data, publish_time=log_time)
                     self.messages += 1
+                if self._queue.empty():
+                    time.sleep(self._batch_seconds)  # caught up: the next wake-up finds several ticks (fewer switches with the loop)
                 if time.monotonic() - last_chunk >= self._chunk_seconds:
                     self._writer.flush()  # ends the chunk: on disk, readable, should the process die now
                     last_chunk = time.monotonic()
