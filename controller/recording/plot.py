@@ -2,7 +2,8 @@
 
 The velocities are the ones the run's report judged (`/tracking`: the supervisor's command and
 the metrics' measurement, by the simulator's truth where there was one); a joint's panel shows
-the position target sent (`/command`) and the position read (`/joints`). Faults are marked.
+the position target sent (`/command`, left out while the joint had no stiffness: damping) and the
+position read (`/joints`). Faults are marked.
 Drawn on a `Figure` with its own Agg canvas: no pyplot, no global backend.
 """
 
@@ -80,6 +81,6 @@ def _joint_series(recording: Recording, path: Path, wanted: Sequence[str]) -> di
     series = {}
     for name, i in columns.items():
         measured = np.array([message.joints[i].position for _, message in ticks])
-        target = np.array([commands[t].q[i] for t, _ in ticks])
+        target = np.array([commands[t].q[i] if commands[t].kp[i] > 0 else np.nan for t, _ in ticks])  # no stiffness: no target
         series[name] = (times, target, measured)
     return series
