@@ -99,7 +99,8 @@ class McapSink:
         self._chunk_seconds = chunk_seconds
         self._batch_seconds = batch_seconds
         self.offered = 0  # items the loop offered
-        self.drops = 0  # of those, dropped: the queue was full (or the writer had stopped)
+        self._refused = 0  # of those, not queued: the queue was full, or the writer had stopped (counted by the loop)
+        self._lost = 0  # queued, then lost: the one being written when a write failed, and those after it (by the writer)
         self.messages = 0  # messages written
         self.error: str | None = None  # why the writer stopped early
         self._closed = False
@@ -115,7 +116,7 @@ class McapSink:
                 return True
             except queue.Full:
                 pass
-        self.drops += 1
+        self._refused += 1
         return False
 
     def _run(self) -> None:
@@ -135,7 +136,7 @@ class McapSink:
                     last_chunk = time.monotonic()
         except Exception as exc:  # the recording stops, the run goes on; the report says why
             self.error = f"{type(exc).__name__}: {exc}"
-            self.drops += 1  # the item being written
+            self._lost += 1  # the item being written
             log.error("flight recorder stopped writing %s: %s", self.path, self.error)
             self._drain()
         try:
@@ -152,7 +153,7 @@ class McapSink:
             item = self._queue.get()
             if item is _STOP:
                 return
-            self.drops += 1
+            self._lost += 1
 
     def _channel(self, topic: Topic) -> int:
         channel = self._channels.get(topic.name)
@@ -183,6 +184,11 @@ class McapSink:
             self.error = self.error or f"the writer did not finish in {CLOSE_TIMEOUT_S} s"
             return  # the thread still owns the file
         self._file.close()
+
+    @property
+    def drops(self) -> int:
+        """Items offered and not written: refused by a full queue, or lost to a failed write."""
+        return self._refused + self._lost
 
     @property
     def bytes(self) -> int:
