@@ -27,7 +27,7 @@ MUJOCO_FOLDERS = ("sim", "controller/bench")
 TORCH_FOLDERS = ("controller/training",)
 
 # The hardware run path: what `g1ctl hw ...` and a hardware session load (a run on a real robot: the driver, the plan of
-# the run, the backend registry and the DDS backends).
+# the run, the backend registry and the DDS backends; its recording included).
 HARDWARE_PATH_MODULES = (
     "controller.runtime.hardware",
     "controller.runtime.loop",
@@ -38,6 +38,8 @@ HARDWARE_PATH_MODULES = (
     "controller.runtime.dds_backend",
     "controller.cli.main",
     "controller.cli.hw",
+    "controller.runtime.session",
+    "controller.recording.recorder",  # `--record` on a robot's run: the loop's side, its writer thread, the topics
 )
 # Folders whose every module must load without mujoco or torch (reference: where it exists).
 SIM_FREE_FOLDERS = (
@@ -63,7 +65,7 @@ CONTROLLER_LAYERS: tuple[tuple[str, ...], ...] = (
     ("assets", "reports", "onnx_session"),  # controller/'s top-level modules
     ("commands", "planner", "estimation"),  # the command vocabulary; the planner contract and its runtime; the state estimator
     ("inputs", "motion_data", "reference"),  # command sources; the motion dataset; what a tracker follows
-    ("tracking",),  # trackers: reference window in, joint command out
+    ("tracking", "recording"),  # trackers: reference window in, joint command out; the flight recorder and its readers
     ("runtime",),  # sessions, backends, whole sim and robot runs
     ("eval", "text"),  # applications that drive runs: suites and the dataset recorder; prompts run as programs
     ("training",),

@@ -1,6 +1,7 @@
 """`g1ctl bench ...`: benchmarks, each printing and writing a JSON report.
 
 g1ctl bench loop [--report PATH] [--policy NAME] [--rounds N] [--duration S] [--estimator]
+g1ctl bench recorder [--report PATH] [--duration 60] [--rounds 2] [--hardware sim-can] [--keep DIR]
 g1ctl bench estimator [--report PATH] [--backends sim-can,sim-dds] [--cases NAMES] [--seed 1]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
@@ -31,6 +32,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     loop.add_argument("--rounds", type=int, default=3, help="alternating runs of each loop")
     loop.add_argument("--duration", type=float, default=20.0)
     loop.add_argument("--estimator", action="store_true", help="the stack runs the state estimator, as on hardware")
+
+    recorder = bench_sub.add_parser("recorder", help="the flight recorder's cost to the loop (recording on against off) and its drops")
+    recorder.add_argument("--report", type=Path, default=None)
+    recorder.add_argument("--duration", type=float, default=60.0, help="simulated seconds of each run")
+    recorder.add_argument("--rounds", type=int, default=2, help="alternating runs of each, off then on")
+    recorder.add_argument("--policy", default="fastsac")
+    recorder.add_argument("--hardware", default=None, help="through simulated hardware (sim-can, sim-mixed); default: the simulator")
+    recorder.add_argument("--keep", type=Path, default=None, help="keep the recordings in this folder")
 
     estimator = bench_sub.add_parser("estimator", help="the state estimator against the simulator's truth: drift, heading, velocity, cost")
     estimator.add_argument("--report", type=Path, default=None)
@@ -100,6 +109,12 @@ def run(args: argparse.Namespace) -> int:
         return _caption(args)
     if args.bench_command == "estimator":
         return _estimator(args)
+    if args.bench_command == "recorder":
+        from controller.bench.recorder import run_recorder_bench  # noqa: PLC0415 - imports MuJoCo
+
+        report = run_recorder_bench(args.duration, args.rounds, args.hardware, args.policy, args.assets_dir, args.keep)
+        _emit(report, args.report)
+        return 0 if report["targets_met"] else 1
     from controller.bench.loop import run_loop_bench  # noqa: PLC0415 - imports MuJoCo
 
     _emit(run_loop_bench(args.policy, args.rounds, args.duration, args.assets_dir, args.estimator), args.report)

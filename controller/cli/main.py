@@ -6,8 +6,9 @@ Usage (each command group's module shows its own):
     g1ctl hw ...                  bench bring-up on real or simulated hardware (controller/cli/hw.py)
     g1ctl robot --dds             a simulated G1 in its own process on the robot's DDS topics (controller/cli/robot.py)
     g1ctl plan "PROMPT" [--sim]   a typed instruction planned into clauses, run on the simulated G1 (controller/cli/plan.py)
-    g1ctl bench loop|hw|dds|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
+    g1ctl bench loop|hw|dds|recorder|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
     g1ctl eval --suite NAME       a robustness sweep, locally or on Ray (controller/cli/eval.py)
+    g1ctl log info|plot|replay FILE   read a flight recording made with --record FILE.mcap (controller/cli/log.py)
     g1ctl dataset record|import|info   the planner's motion dataset (controller/cli/dataset.py)
     g1ctl train planner, g1ctl viz plan   the planner (controller/cli/planner.py)
     g1ctl assets fetch|path, g1ctl scenarios   assets, and what ships by name (controller/cli/catalog.py)
@@ -26,7 +27,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from controller.cli import bench, catalog, dataset, plan, planner, robot, run, sim
+from controller.cli import bench, catalog, dataset, log, plan, planner, robot, run, sim
 from controller.cli import eval as eval_commands
 from controller.cli import hw as hw_commands
 from hw.errors import G1Error, HardwareFault, RunAborted
@@ -35,7 +36,7 @@ from hw.errors import G1Error, HardwareFault, RunAborted
 # dependencies (MuJoCo, onnxruntime, torch) only when its command runs.
 COMMANDS: dict[str, ModuleType] = {
     "sim": sim, "run": run, "hw": hw_commands, "plan": plan, "bench": bench, "dataset": dataset,
-    "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog, "robot": robot, "eval": eval_commands,
+    "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog, "robot": robot, "eval": eval_commands, "log": log,
 }  # fmt: skip
 
 

@@ -2,7 +2,7 @@
 
 g1ctl plan "walk forward two meters, then turn left 90 degrees, then wave with your right hand"
            [--sim | --hardware sim-can|sim-mixed|sim-dds|g1-dds|PATH] [--video runs/plan.mp4] [--report runs/plan.json]
-           [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress]
+           [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress] [--record runs/plan.mcap]
 
 Prints the decomposition (clauses, resolved quantities, gestures); with --sim runs it on the
 simulated G1 directly, with --hardware through that hardware (simulated buses, the simulated G1
@@ -39,6 +39,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--video", type=Path, default=None, help="on the simulator: an .mp4 or .gif of the run, the current clause as a caption"
     )
     plan.add_argument("--report", type=Path, default=None, help="write the JSON report here")
+    plan.add_argument("--record", type=Path, default=None, help="record every tick of the run into this MCAP file (g1ctl log reads it)")
     plan.add_argument("--seed", type=int, default=0)
     plan.add_argument("--policy", default="fastsac", help="locomotion policy preset of the tracker")
     plan.add_argument("--naive", action="store_true", help="join clauses without blending (the baseline of the transition score)")
@@ -54,6 +55,12 @@ def run(args: argparse.Namespace) -> int:
     runs = args.sim or args.hardware is not None
     if args.video is not None and not runs:
         raise ConfigError("--video needs a run to film: add --sim, or --hardware with simulated hardware (sim-can, sim-mixed, sim-dds)")
+    if args.record is not None:
+        if not runs:
+            raise ConfigError("--record needs a run to record: add --sim, or --hardware NAME")
+        from controller.recording.sink import check_record_path  # noqa: PLC0415
+
+        check_record_path(args.record)  # before the sentence encoder loads
     hardware = _hardware(args) if args.hardware is not None else None
     on_robot = hardware is not None and not hardware.entry.simulated
     if args.video is not None and not on_robot:
@@ -74,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     report = planner.simulate(program, seed=args.seed, policy=args.policy, video=args.video, report=args.report,
                               blend=not args.naive, progress=args.progress, hardware=hardware,
-                              status=on_robot and sys.stderr.isatty())  # fmt: skip
+                              status=on_robot and sys.stderr.isatty(), record=args.record)  # fmt: skip
     for c in report["clauses"]:
         flags = " (timed out)" if c["timed_out"] else ""
         print(
@@ -84,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     keys = ("measured_by", "total_displacement", "total_displacement_estimate", "total_heading_change_deg",
             "total_heading_change_deg_estimate", "order_accuracy", "transition_score", "falls")  # fmt: skip
     print(json.dumps({k: report[k] for k in keys if k in report}))
-    for key, path in (("video", args.video), ("report", args.report)):
+    for key, path in (("video", args.video), ("report", args.report), ("recording", args.record)):
         if path is not None:
             print(f"{key}: {path}")
     from controller.cli.sim import print_fault_ending  # noqa: PLC0415

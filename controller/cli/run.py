@@ -2,7 +2,7 @@
 
 g1ctl run [--input auto|keyboard|gamepad|scripted|unitree-remote] [--scenario walk_turn_stop] [--video runs/run.mp4]
           [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can|sim-dds|g1-dds|PATH] [--duration S] [--headless]
-          [--rt-priority 50] [--cpu N]
+          [--rt-priority 50] [--cpu N] [--record runs/run.mcap]
 
 With a real G1's config (`simulated: false`, e.g. a copy of g1-dds.yaml) the run drives that robot
 (the same driver, `controller/runtime/driver.py`, on the registry's `real-dds` backend, no simulator):
@@ -50,6 +50,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--estimator-config", default=None, help="the state estimator's YAML (default: configs/estimator.yaml)")
     run.add_argument("--rt-priority", type=int, default=0, help="on a real G1: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
     run.add_argument("--cpu", type=int, default=None, help="on a real G1: pin the run to this CPU")
+    run.add_argument("--record", type=Path, default=None, help="record every tick into this MCAP file (g1ctl log reads it)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -70,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
         assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(), rt_priority=args.rt_priority, cpu=args.cpu,
-        estimator=args.estimator, estimator_config=args.estimator_config,
+        estimator=args.estimator, estimator_config=args.estimator_config, record=args.record,
     )  # fmt: skip
     plan = resolve_run(cfg, choice)
     if source != "scripted":

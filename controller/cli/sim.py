@@ -3,7 +3,7 @@
 g1ctl sim --scenario walk_turn_stop [--policy fastsac] [--tracker velocity] [--duration S] [--seed N]
           [--video runs/demo.mp4] [--picture last.png] [--report runs/report.json] [--realtime] [--viewer]
           [--input scripted|keyboard|gamepad|unitree-remote] [--hardware sim-can|sim-mixed|sim-dds|PATH] [--faults FILE] [--progress]
-          [--perturb push|rough|FILE]
+          [--perturb push|rough|FILE] [--record runs/run.mcap]
 """
 
 from __future__ import annotations
@@ -52,6 +52,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     sim.add_argument("--viewer", action="store_true", help="open MuJoCo's interactive viewer (needs a display)")
     sim.add_argument("--progress", action="store_true", help="show a progress bar")
     sim.add_argument("--status", action="store_true", help="a live status line on stderr: mode, command, measured velocity, plan latency")
+    sim.add_argument("--record", type=Path, default=None, help="record every tick into this MCAP file (g1ctl log reads it)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
         input=args.input,
         video=args.video, video_fps=args.video_fps, picture=args.picture, report=args.report, plot=args.plot, realtime=args.realtime,
         viewer=args.viewer, progress=args.progress, assets_dir=args.assets_dir, hardware=args.hardware, faults=args.faults,
-        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config, perturbations=perturbations,
+        status=args.status, estimator=args.estimator, estimator_config=args.estimator_config, record=args.record,
+        perturbations=perturbations,
     )  # fmt: skip
     return run_and_summarize(resolve_run(cfg, choice))
 
@@ -96,6 +98,9 @@ def run_and_summarize(plan: RunPlan) -> int:
     for key in ("video", "picture", "plot"):
         if key in report:
             print(f"{key}: {report[key]}")
+    if "recorder" in report:
+        recorder = report["recorder"]
+        print(f"recording: {recorder['path']} ({recorder['messages']} messages, {recorder['drops']} ticks dropped)")
     if plan.outputs.report:
         print(f"report: {plan.outputs.report}")
     if "hw" in report:

@@ -93,6 +93,7 @@ def execute(plan: RunPlan, hooks: RunHooks | None = None) -> dict[str, Any]:
             report["picture"] = str(plan.outputs.picture)
         if built.recorder is not None:
             report["video"] = str(plan.outputs.video)
+    report |= built.session.recorder_report()  # after closing: the recording is finished
     hw = built.session.backend.report()  # after closing: the counters include the damped shutdown
     if hw is not None:
         report["hw"] = hw
@@ -132,7 +133,8 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
     desc = f"{plan.backend.name} {plan.scenario_name if plan.input == 'scripted' else plan.input}"
     bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not outputs.progress, desc=desc, file=sys.stderr))
     reference = _reference(plan, side, tracker.command_limits, stack, hooks)
-    session = Session(backend, tracker, source, reference, attach_estimator(backend, plan))
+    session = Session(backend, tracker, source, reference, attach_estimator(backend, plan), outputs.record)
+    stack.callback(session.close)
     ghost = None
     if viewer is not None and reference is not None:
         from sim.render import Ghost  # noqa: PLC0415

@@ -47,6 +47,13 @@ class RunConfig:
     cpu: int | None = None  # on a real robot: pin the run to this CPU
     estimator: bool = False  # estimate the base position on the simulator too (every other robot always runs the estimator)
     estimator_config: str | None = None  # the estimator's YAML (None: configs/estimator.yaml)
+    record: Path | None = None  # an MCAP file that records every tick (`--record`, controller/recording)
+
+    def __post_init__(self) -> None:
+        if self.record is not None:  # refused here, before anything starts, when it cannot be written
+            from controller.recording.sink import check_record_path  # noqa: PLC0415
+
+            check_record_path(self.record)
 
 
 @dataclass(frozen=True)

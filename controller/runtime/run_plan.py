@@ -44,6 +44,7 @@ class RunOutputs:
     viewer: bool
     progress: bool
     status: bool
+    record: Path | None  # the flight recording (`--record FILE.mcap`)
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,7 @@ def resolve_run(cfg: RunConfig, choice: BackendChoice | None = None) -> RunPlan:
     outputs = RunOutputs(
         report=cfg.report, plot=cfg.plot or (cfg.report.with_suffix(".png") if cfg.report else None), video=cfg.video,
         video_fps=cfg.video_fps, picture=cfg.picture, viewer=cfg.viewer, progress=cfg.progress, status=cfg.status,
+        record=cfg.record,
     )  # fmt: skip
     return RunPlan(
         backend=entry, hardware_name=choice.hardware_name, hardware=choice.hardware, input=cfg.input, scenario_name=cfg.scenario,

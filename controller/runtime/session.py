@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from controller.commands.velocity import VelocityCommand
 from controller.inputs.base import CommandSource
+from controller.recording.tick import Tick
 from controller.reference.source import CommandReference, ReferenceSource
 from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
@@ -25,16 +27,20 @@ from controller.tracking.tracker import Tracker
 from hw.robot import RobotInterface
 from hw.types import RobotState
 
+if TYPE_CHECKING:
+    from controller.recording.recorder import FlightRecorder
+
 log = logging.getLogger(__name__)
 
 
 class Session:
     def __init__(
         self, backend: Backend, tracker: Tracker, source: CommandSource, reference: ReferenceSource | None = None,
-        estimated: EstimatedRobot | None = None,
+        estimated: EstimatedRobot | None = None, record: Path | None = None,
     ) -> None:  # fmt: skip
         """`estimated`: the backend's robot read through a state estimator, what the controller sees instead; its fault
-        holds position-based references, and where a simulator stands behind the robot the estimate is judged by its truth."""
+        holds position-based references, and where a simulator stands behind the robot the estimate is judged by its truth.
+        `record`: an MCAP file that every tick is recorded into (`--record`); `close` finishes it."""
         self.backend = backend
         self.robot: EstimatedRobot | RobotInterface = estimated if estimated is not None else backend.robot
         self.tracker = tracker
@@ -53,6 +59,12 @@ class Session:
         self.start_time = backend.now()
         self.ticks = 0
         self.last_window: ReferenceWindow | None = None  # for displays: the plan being tracked, the command
+        self.recorder: FlightRecorder | None = None
+        if record is not None:
+            from controller.recording.recorder import FlightRecorder  # noqa: PLC0415 - mcap and protobuf only when recording
+
+            run = {"tracker": tracker.name, "rate_hz": tracker.rate_hz, "backend": type(backend).__name__}
+            self.recorder = FlightRecorder(record, backend.robot, estimated.estimator if estimated is not None else None, run)
 
     def start(self) -> None:
         """Bring the backend up; run time counts from here (hardware: after the soft start)."""
@@ -66,14 +78,15 @@ class Session:
         state = self.robot.read()
         sample = self.source.poll(state.time)
         was_damping = supervisor.mode is Mode.DAMP
-        velocity = supervisor.update(sample, tracker.latched_fault or backend.fault())
+        fault = tracker.latched_fault or backend.fault()
+        velocity = supervisor.update(sample, fault)
         if supervisor.mode is Mode.DAMP and not was_damping:
             self.damp_time = round(state.time - self.start_time, 4)
         truth = backend.truth()
         if truth is None and self.estimated is not None and backend.measures_base_position:
             truth = self.estimated.measured  # the simulator read directly is its own truth; the controller sees the estimate
         measured = truth or state  # metrics use the simulator's ground truth where there is one
-        self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
+        measured_velocity = self.metrics.record(measured.time, measured.base_pos, measured.base_quat, velocity)
         if self.estimated is not None:
             self._watch_estimate(state, truth, velocity)
         running = supervisor.mode is Mode.RUN
@@ -86,7 +99,16 @@ class Session:
         self.step_times.append(time.perf_counter() - t0)
         self.robot.write(command)
         self.ticks += 1
-        if backend.has_fallen():
+        fell = backend.has_fallen()
+        if self.recorder is not None:
+            reading = self.estimated.measured if self.estimated is not None and self.estimated.measured is not None else state
+            reason = supervisor.damp_reason if supervisor.mode is Mode.DAMP else supervisor.hold_reason
+            self.recorder.record(
+                Tick(
+                    state, reading, truth, sample, velocity, measured_velocity, supervisor.mode.value, reason, fault, window, command, fell
+                )
+            )
+        if fell:
             self.falls.append(round(state.time - self.start_time, 3))
             if supervisor.mode is Mode.DAMP or not backend.recover_from_fall():
                 return False  # damped on purpose, or on hardware: nothing left to run
@@ -119,6 +141,17 @@ class Session:
         if self.supervisor.mode is not Mode.DAMP:
             self.damp_time = round(self.backend.now() - self.start_time, 4)
         self.supervisor.damp(f"fault: {reason}")
+        if self.recorder is not None:
+            self.recorder.note("session", f"fault: {reason}")
+
+    def close(self) -> None:
+        """Finish the recording, if any (every exit path of a run; safe twice)."""
+        if self.recorder is not None:
+            self.recorder.close(self.backend.now())
+
+    def recorder_report(self) -> dict[str, Any]:
+        """The report's `recorder` block once `close`d: the file, its messages and bytes, the ticks dropped; {} when not recording."""
+        return {"recorder": self.recorder.report()} if self.recorder is not None else {}
 
     def report(self) -> dict[str, Any]:
         """What happened so far: tracking figures, the final mode and why (the backend's counters: `Backend.report`)."""

@@ -36,7 +36,8 @@ class TrackingMetrics:
         """Forget the previous pose (after a reset the displacement is meaningless)."""
         self._prev = None
 
-    def record(self, t: float, base_pos: FloatArray, base_quat: FloatArray, command: VelocityCommand) -> None:
+    def record(self, t: float, base_pos: FloatArray, base_quat: FloatArray, command: VelocityCommand) -> tuple[float, float, float] | None:
+        """The velocity measured over the tick that ends at `t` (vx, vy, yaw rate in the heading frame); None at a first sample."""
         yaw = quat.heading_of(base_quat)
         if command != self._last_command:
             self._last_command = command
@@ -44,7 +45,7 @@ class TrackingMetrics:
         px, py = float(base_pos[0]), float(base_pos[1])
         prev, self._prev = self._prev, (t, px, py, yaw)
         if prev is None or t <= prev[0]:
-            return
+            return None
         dt = t - prev[0]
         wx, wy = (px - prev[1]) / dt, (py - prev[2]) / dt
         c, s = math.cos(yaw), math.sin(yaw)
@@ -56,6 +57,7 @@ class TrackingMetrics:
         if t - self._changed_at >= self.settle:
             self._vel_errors.append(math.hypot(vx - command.vx, vy - command.vy))
             self._yaw_errors.append(abs(wz - command.yaw_rate))
+        return vx, vy, wz
 
     @property
     def velocity_error_mean(self) -> float:

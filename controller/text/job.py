@@ -45,6 +45,7 @@ class TextSimConfig:
     # Through this hardware (simulated buses, the simulated G1 over DDS, a real G1), as `choose_backend` loaded it; None: the simulator
     hardware: BackendChoice | None = None
     status: bool = False  # a live status line on stderr, with the clause running
+    record: Path | None = None  # an MCAP file that records every tick of the run
     run: TextRunConfig = field(default_factory=TextRunConfig)
 
 
@@ -83,7 +84,7 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     run_cfg = RunConfig(
         scenario="stand", policy=cfg.policy, planner=True, duration=budget_seconds(program, cfg.run), seed=cfg.seed,
         input="unitree-remote" if on_robot else "scripted", video=cfg.video, report=None, plot=None, progress=cfg.progress,
-        assets_dir=cfg.assets_dir, hardware=choice.hardware_name, status=cfg.status,
+        assets_dir=cfg.assets_dir, hardware=choice.hardware_name, status=cfg.status, record=cfg.record,
     )  # fmt: skip
     report = execute(resolve_run(run_cfg, choice), hooks)
     reference = holder[0]

@@ -56,11 +56,11 @@ def test_sim_refuses_a_real_robot_in_one_line(tmp_path: Path, claim_dds_domain: 
 
 
 def test_a_robot_run_imports_no_simulator() -> None:
-    """`g1ctl run` and `g1ctl plan` on a real robot: the run, its state estimator and the text job load no MuJoCo."""
+    """`g1ctl run` and `g1ctl plan` on a real robot: the run, its state estimator, its recording and the text job load no MuJoCo."""
     code = (
         "import sys; import controller.runtime.driver, controller.runtime.dds_backend, controller.runtime.run_plan, "
         "controller.runtime.backend_registry, controller.cli.sim, controller.cli.run, controller.cli.plan, "
-        "controller.text.job, controller.text.service, controller.runtime.estimation; "
+        "controller.text.job, controller.text.service, controller.runtime.estimation, controller.recording.recorder; "
         "assert 'mujoco' not in sys.modules and 'sim.robot' not in sys.modules, sorted(m for m in sys.modules if 'mujoco' in m)"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)

@@ -9,12 +9,25 @@ import pytest
 
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
+from controller.bench.recorder import run_recorder_bench
 
 
 def test_loop_bench_reports_both_loops() -> None:
     report = run_loop_bench("fastsac", rounds=1, duration=2.0, assets_dir=None)
     assert report["stack_rtf"] > 0 and report["minimal_rtf"] > 0
     assert report["ratio"] == pytest.approx(report["stack_rtf"] / report["minimal_rtf"], abs=2e-3)  # both sides rounded to 3 places
+
+
+@pytest.mark.slow
+def test_recorder_bench_reports_both_sides_and_keeps_its_recordings_where_asked(tmp_path: Path) -> None:
+    report = run_recorder_bench(duration=2.0, rounds=1, keep=tmp_path)
+    assert report["wall_per_tick_ms"]["off"] > 0 and report["wall_per_tick_ms"]["on"] > 0 and report["control_period_ms"] == 20.0
+    loop, others = report["loop_cpu_per_tick_ms"], report["other_cpu_per_tick_ms"]
+    assert report["overhead_ms"] == pytest.approx(loop["on"] - loop["off"] + others["on"] - others["off"], abs=1e-3)  # rounded figures
+    assert report["overhead_share"] == pytest.approx(report["overhead_ms"] / 20.0, abs=1e-4)
+    assert report["messages"] > 100 * 8 and set(report["record_ms"]) == {"p50", "p99"}
+    assert report["targets_met"] == (report["overhead_share"] <= 0.05 and report["drops"] == 0)
+    assert (tmp_path / "round0.mcap").stat().st_size > 10_000
 
 
 @pytest.mark.slow
