@@ -261,7 +261,7 @@ def test_faults_from_a_fault_plan_are_seeded() -> None:
 
 
 def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
-    from hw import bringup
+    from hw.bench import BusBenchRobot
 
     with rig(g1_model) as (host, twin, _plant):
         host.configure()
@@ -273,7 +273,7 @@ def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
             host.cycle()
             twin.step()
 
-        result = bringup.sweep(host, "left_elbow_joint", pump, fraction=0.3, speed=1.0)
+        result = BusBenchRobot(host, pump, "sim-can").sweep("left_elbow_joint", fraction=0.3, speed=1.0)
         assert not result.completed and ("not following" in result.reason or "unexpected torque" in result.reason)
         assert host.state is Lifecycle.INACTIVE  # the sweep ends deactivated: damped, then disabled
 
