@@ -43,9 +43,9 @@ if TYPE_CHECKING:
     from hw.dds.robot import DdsRobot
 
 GANTRY_HEIGHT_M = 0.25  # the simulated robot hangs this far above its standing height
-# The soft start of a simulated robot: it starts still on its gantry, and the bench's soft start holds the measured
-# pose, so there is nothing to ramp (a real robot keeps its config's).
-SIMULATED_SOFT_START_S = 0.2
+# The simulated G1 is a Python process stepping MuJoCo on the wall clock: on a loaded machine its LowState_s can pause
+# for longer than a real robot's 50 ms timeout, which would latch a fault mid-sweep on a robot that is only late.
+SIMULATED_STATE_TIMEOUT_S = 0.25
 
 Opener = Callable[[RobotConfig, str, str | None, ExitStack], BenchRobot]
 
@@ -99,6 +99,7 @@ def open_real_buses(cfg: RobotConfig, name: str, assets_dir: str | None, stack: 
 
 def open_simulated_buses(cfg: RobotConfig, name: str, assets_dir: str | None, stack: ExitStack) -> BenchRobot:
     from controller.assets import ensure_assets  # noqa: PLC0415
+    from controller.runtime.sim_backends import SIM_CYCLE_TIMEOUT_S, SIM_SOFT_START_S  # noqa: PLC0415
     from hw.emulation.rig import SimulatedHardware  # noqa: PLC0415
     from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415 - MuJoCo only for simulated hardware
     from sim.robot import SimRobot  # noqa: PLC0415
@@ -106,8 +107,9 @@ def open_simulated_buses(cfg: RobotConfig, name: str, assets_dir: str | None, st
 
     sim = stack.enter_context(SimRobot(build_model(ensure_assets(assets_dir, quiet=True).g1_mjcf)))
     plant = MuJoCoPlant(sim, gantry_height=GANTRY_HEIGHT_M)
-    bus_cfg = _bus_config(cfg)
-    bus_cfg = dataclasses.replace(bus_cfg, safety=dataclasses.replace(bus_cfg.safety, soft_start_time=SIMULATED_SOFT_START_S))
+    bus_cfg = _bus_config(cfg)  # timed as a simulated run's: emulators may answer later in wall time than motors do
+    safety = dataclasses.replace(bus_cfg.safety, soft_start_time=SIM_SOFT_START_S, cycle_timeout=SIM_CYCLE_TIMEOUT_S)
+    bus_cfg = dataclasses.replace(bus_cfg, safety=safety)
     rig = stack.enter_context(SimulatedHardware(bus_cfg, plant))
     host = HardwareRobot(rig.host_config, stamp_clock=plant.time, await_replies=rig.await_replies)
 
@@ -118,6 +120,7 @@ def open_simulated_buses(cfg: RobotConfig, name: str, assets_dir: str | None, st
     robot = BusBenchRobot(host, pump, name)
 
     def keep_wire_report() -> None:  # once the robot is closed, before the emulators stop
+        rig.step()  # the motors act on the last frames the host sent (its damping, then motor mode off)
         robot.wire_report = rig.audit.report()
 
     stack.callback(keep_wire_report)
@@ -135,9 +138,9 @@ def open_real_dds(cfg: RobotConfig, name: str, assets_dir: str | None, stack: Ex
 
 
 def open_simulated_dds(cfg: RobotConfig, name: str, assets_dir: str | None, stack: ExitStack) -> BenchRobot:
-    """`g1ctl robot --dds --gantry` (a sweep cannot tip it over) on a DDS domain of its own; the process is stopped
-    after the robot is closed."""
-    from controller.runtime.dds_backend import RobotProcess  # noqa: PLC0415 - cyclonedds only for a DDS config
+    """`g1ctl robot --dds --gantry` (a sweep cannot tip it over) on a DDS domain of its own, timed as a simulated run's;
+    the process is stopped after the robot is closed."""
+    from controller.runtime.dds_backend import SIM_SOFT_START_S, RobotProcess  # noqa: PLC0415 - cyclonedds only for a DDS config
     from hw.dds.domains import claim_domain  # noqa: PLC0415
 
     dds_cfg = _dds_config(cfg)
@@ -146,9 +149,10 @@ def open_simulated_dds(cfg: RobotConfig, name: str, assets_dir: str | None, stac
     dds_cfg = dataclasses.replace(
         dds_cfg,
         dds=dataclasses.replace(dds_cfg.dds, domain=domain.domain),
-        safety=dataclasses.replace(dds_cfg.safety, soft_start_time=SIMULATED_SOFT_START_S),
+        safety=dataclasses.replace(dds_cfg.safety, soft_start_time=SIM_SOFT_START_S, state_timeout=SIMULATED_STATE_TIMEOUT_S),
     )
-    process = RobotProcess(dds_cfg, assets_dir, extra_args=("--gantry",))
+    # The config's joint limits judge what the robot takes (its wire report), and its imu_model is how its IMU measures.
+    process = RobotProcess(dds_cfg, assets_dir, extra_args=("--gantry", "--joint-map", name), truth=False)
     stack.callback(process.stop)
     g1, robot = _dds_robot(dds_cfg, name)
 

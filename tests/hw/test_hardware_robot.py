@@ -278,6 +278,22 @@ def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
         assert host.state is Lifecycle.INACTIVE  # the sweep ends deactivated: damped, then disabled
 
 
+def test_a_robot_activated_again_after_deactivate_enables_its_motors(g1_model) -> None:
+    """deactivate takes the MIT motors out of motor mode: activating again enables them first, or they would stay limp
+    under every command (a bench script sweeps joint after joint, a stopped sweep deactivates)."""
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        host.deactivate()
+        twin.step()
+        host.activate()
+        while host.state is Lifecycle.ACTIVATING:
+            run_cycles(host, twin, 1)
+        start = len(plant.applied)
+        run_cycles(host, twin, 5)
+        holding = {joint: kp for joint, _, kp, _ in plant.applied[start:]}
+        assert len(holding) == N and min(holding.values()) > 0, holding
+
+
 def test_rewritten_command_after_rearm_is_step_limited_again(g1_model) -> None:
     with rig(g1_model) as (host, twin, plant):
         activate(host, twin)
