@@ -4,6 +4,11 @@ in its own robot process, and on a real-bus config where nothing answers or a bu
 from __future__ import annotations
 
 import itertools
+import json
+import signal
+import subprocess
+import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -12,7 +17,7 @@ from controller.runtime.bench_robot import open_robot
 from hw.errors import BusError, ConfigError, LifecycleError, MotorNotFoundError, NotConfirmed
 from hw.g1 import JOINT_NAMES
 from hw.robot import Lifecycle
-from tests.conftest import sim_can_on_real_buses
+from tests.conftest import a_robot_config, sim_can_on_real_buses
 
 
 def one_line(exc: pytest.ExceptionInfo[BaseException]) -> str:
@@ -117,6 +122,31 @@ def test_the_g1_over_dds_in_its_robot_process() -> None:
     assert robot.state is Lifecycle.CLOSED
     wire = robot.wire_report  # the robot process's own audit of every LowCmd_ it took
     assert wire is not None and wire["safe_since"] is not None and wire["outside_limits"] == 0, wire
+
+
+@pytest.mark.slow
+def test_a_real_g1_is_opened_listening_and_released_at_the_first_command(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> None:
+    """A real robot's config (a copy of g1-dds.yaml on loopback) and a stand-in G1 started by hand on its gantry."""
+    pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
+    domain = claim_dds_domain()
+    config = a_robot_config(tmp_path, domain)
+    # The stand-in is a Python process stepping MuJoCo: on a loaded machine its states pause longer than a real G1's.
+    config.write_text(config.read_text().replace("state_timeout: 0.05", "state_timeout: 0.25"))
+    command = [sys.executable, "-m", "controller.cli", "robot", "--dds", "--gantry", "--domain", str(domain), "--duration", "60"]
+    stand_in = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        with open_robot(str(config)) as robot:
+            assert all(r.healthy for r in robot.scan()) and "'ai' active" in robot.notes()[0]  # listening only
+            sweep = robot.sweep("left_elbow_joint", fraction=0.1, speed=1.0)
+            assert sweep.reached_range(), sweep
+            assert "none active" in robot.notes()[0]  # released for the sweep
+        assert robot.state is Lifecycle.CLOSED and robot.wire_report is None  # a real robot: no emulator audits it
+    finally:
+        stand_in.send_signal(signal.SIGTERM)
+        out, err = stand_in.communicate(timeout=20)
+    counters = json.loads(out.strip().splitlines()[-1])
+    assert stand_in.returncode == 0, err
+    assert counters["motion_release_requests"] == 1 and counters["damping_commands"] >= 1  # ended damped
 
 
 def test_a_bus_that_cannot_be_opened_is_refused_in_one_line(tmp_path: Path) -> None:
