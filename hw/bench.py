@@ -3,9 +3,9 @@
 A bench script opens a robot from its hardware config (`controller.runtime.bench_robot.open_robot`)
 and gets a `BenchRobot`: scan every motor, read the state, move one joint within its limits, sweep
 a joint, set an encoder zero (confirmed), damp, read the IMU. The calls are the same on buses
-(`BusBenchRobot`, here, over a `HardwareRobot`) and on a G1 over DDS (`hw.dds.bench.DdsBenchRobot`,
-over a `DdsRobot`); each fills in only what differs: who answered, the IMU's counters, the zero,
-taking the motors from the robot's own controller.
+(`hw.bus_bench.BusBenchRobot`, over a `HardwareRobot`) and on a G1 over DDS (`hw.dds.bench.DdsBenchRobot`,
+over a `DdsRobot`); this module holds the calls and what they return, and each robot fills in only
+what differs: who answered, the IMU's counters, the zero, taking the motors from its own controller.
 
 The robot cycles (500 Hz) only inside a call, through `pump`: one cycle, paced on the wall clock on
 a real robot, or one physics step of simulated buses. A moved joint holds its position while calls
@@ -27,12 +27,8 @@ from typing import Any, ClassVar, Protocol, TypeVar
 import numpy as np
 
 from hw import quat
-from hw.drivers import MitBusDriver
 from hw.errors import ConfigError, HardwareFault, LifecycleError, MotorNotFoundError, NotConfirmed
 from hw.g1 import CONTROL_CYCLE_HZ
-from hw.hardware_robot import HardwareRobot
-from hw.jointmap import motor_to_joint
-from hw.protocols import mit
 from hw.robot import Lifecycle
 from hw.types import JointCommand, LimitedJoint, RobotState
 
@@ -522,60 +518,3 @@ class _Motion:
     stop: str | None = None
     ends: list[float] = field(default_factory=list)
     max_abs_torque: float = 0.0
-
-
-class BusBenchRobot(BenchRobot):
-    """A robot on CAN and RS-485 buses (`HardwareRobot`), real or simulated."""
-
-    transport = "buses"
-    SCAN_COLUMNS = ("bus", "id", "joint", "answered", "q", "temperature", "error")
-
-    def __init__(self, host: HardwareRobot, pump: Pump, config_name: str) -> None:
-        super().__init__(host, host.cfg.joints, pump, config_name, host.cfg.safety.max_temperature)
-        self.host = host
-
-    def status(self) -> list[JointStatus]:
-        now = self.host.stamp_clock()
-        rows = []
-        for name in self.joint_names:
-            joint = self.host.cfg.joints[name]
-            fb = self.host.feedback(name)
-            answered = fb.stamp is not None
-            q, dq, tau = motor_to_joint(joint, fb.position, fb.velocity, fb.torque) if answered else (None, None, None)
-            hot = fb.temperature is not None and fb.temperature > self.max_temperature
-            age = None if fb.stamp is None else round(1e3 * (now - fb.stamp), 1)
-            healthy = answered and not fb.faulted and not hot
-            rows.append(JointStatus(name, joint.bus, joint.id, answered, q, dq, tau, fb.temperature, fb.error, healthy, age))
-        return rows
-
-    def _silent_motors(self) -> dict[str, str]:
-        joints = self.host.cfg.joints
-        return {n: f"bus {joints[n].bus}, id {joints[n].id}" for n in self.joint_names if self.host.feedback(n).stamp is None}
-
-    def _zero(self, joint: str) -> ZeroResult:
-        """MIT motors: the encoder zero set on the motor. RS-485 motors have no zero command: the joint map's
-        `zero_offset` that makes the current position read 0."""
-        driver = self.host.driver_of(joint)
-        cfg = self.host.cfg.joints[joint]
-        if isinstance(driver, MitBusDriver):
-            driver.send_special(mit.SET_ZERO, (cfg.id,))
-            driver.collect_now(0.02)
-            return ZeroResult(joint, "encoder zero set on the motor", None)
-        fb = self.host.feedback(joint)
-        position = motor_to_joint(cfg, fb.position, 0.0, 0.0)[0] - cfg.zero_offset
-        return ZeroResult(joint, "no zero command on this protocol: set zero_offset in the joint map", round(-position, 6))
-
-    def _imu_stamp(self) -> float | None:
-        if self.host.imu is None:
-            raise ConfigError(f"hardware config '{self.config_name}' has no IMU (add an 'imu' section with its serial bus)")
-        return self.host.imu.stamp
-
-    def _imu_counts(self) -> tuple[int, int, int | None]:
-        if self.host.imu is None:
-            return 0, 0, None
-        c = self.host.imu.counters
-        return c.frames, c.crc_errors, c.sequence_gaps
-
-    def _imu_silent(self, seconds: float) -> str:
-        name = "-" if self.host.imu is None else self.host.imu.name
-        return f"no valid IMU frame in {seconds} s on serial port '{name}'; check the port, baud rate and wiring"

@@ -53,7 +53,7 @@ SIM_FREE_FOLDERS = (
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
 # own firmware, so it may share the pure protocol codecs, never the host's drivers.
-HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.safety", "hw.bench")
+HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.safety", "hw.bench", "hw.bus_bench")
 
 # `controller/` keeps its code in role folders; only these modules sit at its top level.
 CONTROLLER_TOP_LEVEL = {"__init__", "assets", "reports", "onnx_session"}

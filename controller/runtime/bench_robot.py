@@ -32,7 +32,8 @@ from typing import TYPE_CHECKING
 
 from controller.runtime.backend_registry import RobotConfig, robot_kind
 from controller.runtime.loop import WallClock
-from hw.bench import BenchRobot, BusBenchRobot, Pump
+from hw.bench import BenchRobot, Pump
+from hw.bus_bench import BusBenchRobot
 from hw.dds.config import DdsHardwareConfig
 from hw.errors import ConfigError, HardwareFault
 from hw.g1 import CONTROL_CYCLE_HZ

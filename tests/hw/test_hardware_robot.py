@@ -261,7 +261,7 @@ def test_faults_from_a_fault_plan_are_seeded() -> None:
 
 
 def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
-    from hw.bench import BusBenchRobot
+    from hw.bus_bench import BusBenchRobot
 
     with rig(g1_model) as (host, twin, _plant):
         host.configure()
