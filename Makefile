@@ -36,8 +36,8 @@ test-train: install-train
 	$(BIN)/python -m pytest -q -m train $(PYTEST_ARGS)
 
 lint: install
-	$(BIN)/ruff check controller hw sim tests
-	$(BIN)/ruff format --check controller hw sim tests
+	$(BIN)/ruff check controller hw sim tests examples
+	$(BIN)/ruff format --check controller hw sim tests examples
 	$(BIN)/mypy
 
 bench: install

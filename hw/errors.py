@@ -50,3 +50,7 @@ class LifecycleError(G1Error, RuntimeError):
 
 class RunAborted(G1Error, RuntimeError):
     """An exception ended a run after it started; its report was written first."""
+
+
+class NotConfirmed(G1Error, RuntimeError):
+    """An operation that needs a person's confirmation (setting an encoder zero) did not get it: nothing was sent."""

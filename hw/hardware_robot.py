@@ -58,6 +58,7 @@ class HardwareRobot(LifecycleRobot):
         self.imu: SerialImu | None = None
         self._has_serial = False
         self._await_replies = await_replies
+        self._motors_disabled = False  # the MIT motors were sent out of motor mode (deactivate): activate enables them
 
     # -- lifecycle -------------------------------------------------------------------
     def configure(self, require_all: bool = True) -> None:
@@ -122,17 +123,25 @@ class HardwareRobot(LifecycleRobot):
 
     def _discover(self) -> list[str]:
         """Enable motor mode limp (zero gains) and collect one reply from each motor."""
+        self._enter_motor_mode()
+        self._exchange(limp=True, timeout=0.05)
+        return [f"{n} (bus {self.cfg.joints[n].bus}, id {self.cfg.joints[n].id})" for n in self._names if self.feedback(n).stamp is None]
+
+    def _enter_motor_mode(self) -> None:
+        """Enable the MIT motors (RS-485 motors are enabled by every command that asks)."""
         for driver in self._drivers.values():
             if isinstance(driver, MitBusDriver):
                 driver.send_special(mit.ENTER_MOTOR_MODE)
                 driver.collect(self._replies_deadline(time.monotonic() + 0.05))
-        self._exchange(limp=True, timeout=0.05)
-        return [f"{n} (bus {self.cfg.joints[n].bus}, id {self.cfg.joints[n].id})" for n in self._names if self.feedback(n).stamp is None]
+        self._motors_disabled = False
 
     def activate(self, target_pose: np.ndarray | None = None) -> None:
-        """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""
+        """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`.
+        After a `deactivate` the MIT motors are enabled again first."""
         if self.state is not Lifecycle.INACTIVE:
             raise LifecycleError(f"activate needs the robot inactive, it is {self.state.value}")
+        if self._motors_disabled:
+            self._enter_motor_mode()
         self._await_first_imu_frame()
         self._exchange(limp=True, timeout=self.cfg.safety.cycle_timeout * 4)
         self._update_state()
@@ -163,6 +172,7 @@ class HardwareRobot(LifecycleRobot):
             if isinstance(driver, MitBusDriver):
                 driver.send_special(mit.EXIT_MOTOR_MODE)
                 driver.collect(self._replies_deadline(time.monotonic() + self.cfg.safety.cycle_timeout))
+        self._motors_disabled = True
         self._exchange(limp=True)
         if self.state is not Lifecycle.ERROR:
             self.state = Lifecycle.INACTIVE

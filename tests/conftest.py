@@ -240,3 +240,20 @@ def sim_dds_config(tmp_path: Path, claim_dds_domain: Callable[[], int]) -> Calla
         return path
 
     return on_a_domain_of_its_own
+
+
+def sim_can_on_real_buses(tmp_path: Path, can0: str | None = None) -> Path:
+    """sim-can's joint map as a real robot's config (`simulated: false`, no IMU): nothing answers on its virtual CAN
+    channels. `can0`: another definition of bus can0 (such as a socketcan channel that does not exist)."""
+    from hw.shipped import config_dir
+
+    text = (config_dir("hardware") / "sim-can.yaml").read_text()
+    lines = [line for line in text.splitlines() if not line.startswith(("imu_model:", "imu:", "  imu:"))]
+    text = "\n".join(lines).replace("simulated: true", "simulated: false")
+    if can0 is not None:
+        old = "  can0: {kind: can, interface: virtual, channel: g1-can0, bitrate: 1000000}"
+        assert old in text
+        text = text.replace(old, f"  can0: {can0}")
+    path = tmp_path / "real-buses.yaml"
+    path.write_text(text + "\n")
+    return path

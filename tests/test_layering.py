@@ -29,7 +29,8 @@ TORCH_FOLDERS = ("controller/training",)
 # The hardware run path: what `g1ctl hw ...` and a hardware session load (a run on a real robot: the driver, the plan of
 # the run, the backend registry and the DDS backends; its recording included).
 HARDWARE_PATH_MODULES = (
-    "controller.runtime.hardware",
+    "controller.runtime.bench_robot",
+    "controller.runtime.bringup",
     "controller.runtime.loop",
     "controller.runtime.supervisor",
     "controller.runtime.driver",
@@ -54,7 +55,7 @@ SIM_FREE_FOLDERS = (
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
 # own firmware, so it may share the pure protocol codecs, never the host's drivers.
-HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.safety", "hw.bringup")
+HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.safety", "hw.bench", "hw.bus_bench")
 
 # `controller/` keeps its code in role folders; only these modules sit at its top level.
 CONTROLLER_TOP_LEVEL = {"__init__", "assets", "reports", "onnx_session"}

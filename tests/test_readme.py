@@ -18,7 +18,7 @@
   time and `sim-dds` starts a DDS robot process (DDS tests must not run beside each other);
   `--video` renders every frame; `hw` operations open hardware; `robot` serves DDS until stopped;
   `plan --sim`, `plan --hardware` and `eval` take tens of seconds to minutes.
-- The Python examples of the README and docs/ run as written.
+- The Python examples of the README and docs/ run as written (a bench script's on a simulated robot).
 """
 
 from __future__ import annotations
@@ -270,15 +270,30 @@ def test_the_readme_runs_some_of_each_kind() -> None:
     assert kinds >= {"scenarios", "hw", "sim"}, f"only {sorted(kinds)} of the README's commands run here"
 
 
-def python_examples() -> list[tuple[Path, str]]:
-    return [(page, block) for page in PAGES for language, block in FENCE.findall(page.read_text()) if language == "python"]
+def python_examples(bench: bool) -> list[tuple[Path, str]]:
+    """The Python blocks of the README and docs/: the bench scripts (they open a simulated robot), or the others."""
+    blocks = [(page, block) for page in PAGES for language, block in FENCE.findall(page.read_text()) if language == "python"]
+    return [(page, block) for page, block in blocks if ("open_robot(" in block) == bench]
 
 
 def test_the_python_examples_run() -> None:
-    examples = python_examples()
+    examples = python_examples(bench=False)
     assert README in {page for page, _ in examples}, "the README lost its Python example"
     for page, block in examples:
         namespace: dict[str, object] = {}
         exec(compile(block, rel(page), "exec"), namespace)
         plan = namespace["plan"]
         assert plan.qpos.shape == (44, 36) and plan.contacts.shape == (44, 2), rel(page)  # type: ignore[attr-defined]
+
+
+@pytest.mark.slow
+def test_the_bench_script_examples_run() -> None:
+    """docs/hardware.md's bench script, on sim-can: it runs as written, and leaves the robot closed."""
+    from hw.robot import Lifecycle
+
+    examples = python_examples(bench=True)
+    assert {rel(page) for page, _ in examples} == {"docs/hardware.md"}
+    for page, block in examples:
+        namespace: dict[str, object] = {}
+        exec(compile(block, rel(page), "exec"), namespace)
+        assert namespace["robot"].state is Lifecycle.CLOSED, rel(page)  # type: ignore[attr-defined]

@@ -1,4 +1,5 @@
-"""`g1ctl hw ...`: bench bring-up against real or simulated hardware from a hardware config.
+"""`g1ctl hw ...`: bench bring-up against real or simulated hardware from a hardware config (the jobs are
+`controller.runtime.bringup`'s, on the bench interface a script uses: `controller.runtime.bench_robot.open_robot`).
 
 g1ctl hw scan    --hardware sim-can      (or a G1 over DDS: g1-dds, sim-dds; these have no zero)
 g1ctl hw monitor --hardware sim-can [--seconds 5] [--refresh 0.2]
@@ -15,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
 from hw.errors import ConfigError
 
@@ -67,25 +67,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run(args: argparse.Namespace) -> int:
     if args.hw_command == "frame":
         return _frame(args)
-    from controller.runtime.bringup import BringupConfig, check  # noqa: PLC0415
+    from controller.runtime.bringup import BringupConfig  # noqa: PLC0415
     from controller.runtime.bringup import run as run_bringup  # noqa: PLC0415
 
     cfg = BringupConfig(
         operation=args.hw_command, hardware=args.hardware, joint=getattr(args, "joint", None), seconds=getattr(args, "seconds", 1.0),
         refresh=getattr(args, "refresh", 0.25), fraction=getattr(args, "fraction", 0.3), speed=getattr(args, "speed", 0.3),
-        rt_priority=args.rt_priority, cpu=args.cpu, assets_dir=args.assets_dir,
+        yes=getattr(args, "yes", False), rt_priority=args.rt_priority, cpu=args.cpu, assets_dir=args.assets_dir,
     )  # fmt: skip
-    check(cfg)  # bad input refused before asking to confirm
-    if cfg.operation in ("zero", "sweep") and not args.yes and not _confirm(f"{cfg.operation} {cfg.joint} on '{cfg.hardware}'?"):
-        print("g1ctl: not confirmed; nothing was sent", file=sys.stderr)
-        return 1
     return run_bringup(cfg)
-
-
-def _confirm(question: str) -> bool:
-    if not sys.stdin.isatty():
-        raise ConfigError(f"{question} needs confirmation: run it in a terminal or pass --yes")
-    return input(f"{question} [y/N] ").strip().lower() in ("y", "yes")
 
 
 def _frame(args: argparse.Namespace) -> int:

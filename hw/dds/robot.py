@@ -73,7 +73,7 @@ class DdsRobot(LifecycleRobot):
         super().__init__(joint_names, pose, clock, JointLimits.from_joint_map(joint_names, cfg.joints), gains, cfg.safety)
         self.cfg = cfg
         self._release = release
-        self.released_mode: str | None = None  # the high-level mode released at configure
+        self.released_mode: str | None = None  # the high-level mode released (at configure, or later by `release_motion_service`)
         self._commanded = False  # the robot is this host's to command (released, activated, damped): only then does it send
         self.link: DdsLink | None = None
         self._closed_counters = LinkCounters()
@@ -93,21 +93,26 @@ class DdsRobot(LifecycleRobot):
         try:
             self.link.connect(self.cfg.connect_timeout)
             if self.cfg.release_motion_service:
-                self.released_mode = self._release_motion_service()
-                self._commanded = True  # the motors are this host's now: from here on every exit damps them
+                self.release_motion_service()
         except Exception:
             self._close_link()
             raise
         self._update_state()
         self.state = Lifecycle.INACTIVE
 
-    def _release_motion_service(self) -> str | None:
-        assert self.link is not None
+    def release_motion_service(self) -> None:
+        """Free the robot from its high-level motion service: its motors are this host's from now on, and every exit
+        damps them. `configure` does it when the config asks; a host that configured only to listen (a bench scan)
+        calls it before it first commands."""
+        if self.link is None:
+            raise LifecycleError(f"releasing the motion service needs a connected robot, it is {self.state.value}")
         if self._release is not None:
-            return self._release(self.link.session)
-        from hw.dds.motion_switcher import release_motion_service  # noqa: PLC0415
+            self.released_mode = self._release(self.link.session)
+        else:
+            from hw.dds.motion_switcher import release_motion_service  # noqa: PLC0415
 
-        return release_motion_service(self.link.session)
+            self.released_mode = release_motion_service(self.link.session)
+        self._commanded = True
 
     def activate(self, target_pose: np.ndarray | None = None) -> None:
         """Soft start: from the measured pose, ramp to `target_pose` (default: the default pose) over `soft_start_time`."""

@@ -106,8 +106,8 @@ def test_sweep_imu_damp_zero_on_simulated_hardware() -> None:
     result = json.loads(sweep.stdout)
     assert result["completed"] and result["low"] < result["high"]
     imu = json.loads(g1ctl("hw", "imu", "--hardware", "sim-can", "--seconds", "0.2").stdout)
-    assert imu["frames"] >= 90 and imu["crc_errors"] == 0
-    assert imu["linear_acceleration"][2] == pytest.approx(9.81, abs=0.15)  # one sample: sim-can's imu_model noise is 0.027 m/s^2
+    assert imu["frames"] >= 90 and imu["samples"] >= 90 and imu["crc_errors"] == 0
+    assert imu["accel_mean"][2] == pytest.approx(9.81, abs=0.15)  # the robot hangs still: its mean is gravity
     assert g1ctl("hw", "damp", "--hardware", "sim-can", "--seconds", "0.1").returncode == 0
     zero = json.loads(g1ctl("hw", "zero", "--hardware", "sim-mixed", "--joint", "left_knee_joint", "--yes").stdout)
     assert zero["zero_offset"] == pytest.approx(-0.669, abs=0.01)

@@ -261,7 +261,7 @@ def test_faults_from_a_fault_plan_are_seeded() -> None:
 
 
 def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
-    from hw import bringup
+    from hw.bus_bench import BusBenchRobot
 
     with rig(g1_model) as (host, twin, _plant):
         host.configure()
@@ -273,9 +273,25 @@ def test_stuck_motor_aborts_a_sweep_on_unexpected_torque(g1_model) -> None:
             host.cycle()
             twin.step()
 
-        result = bringup.sweep(host, "left_elbow_joint", pump, fraction=0.3, speed=1.0)
+        result = BusBenchRobot(host, pump, "sim-can").sweep("left_elbow_joint", fraction=0.3, speed=1.0)
         assert not result.completed and ("not following" in result.reason or "unexpected torque" in result.reason)
         assert host.state is Lifecycle.INACTIVE  # the sweep ends deactivated: damped, then disabled
+
+
+def test_a_robot_activated_again_after_deactivate_enables_its_motors(g1_model) -> None:
+    """deactivate takes the MIT motors out of motor mode: activating again enables them first, or they would stay limp
+    under every command (a bench script sweeps joint after joint, a stopped sweep deactivates)."""
+    with rig(g1_model) as (host, twin, plant):
+        activate(host, twin)
+        host.deactivate()
+        twin.step()
+        host.activate()
+        while host.state is Lifecycle.ACTIVATING:
+            run_cycles(host, twin, 1)
+        start = len(plant.applied)
+        run_cycles(host, twin, 5)
+        holding = {joint: kp for joint, _, kp, _ in plant.applied[start:]}
+        assert len(holding) == N and min(holding.values()) > 0, holding
 
 
 def test_rewritten_command_after_rearm_is_step_limited_again(g1_model) -> None:
