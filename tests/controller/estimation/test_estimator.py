@@ -112,7 +112,11 @@ def test_missing_leg_joints_are_one_line() -> None:
         (("  foot_velocity: 0.05", "  foot_velocity: fast"), r"estimator.yaml: measurement.foot_velocity: expected a number, got 'fast'$"),
         (
             ("  hysteresis: 0.002", "  hysteresys: 0.002"),
-            r"estimator.yaml: unknown key 'contact.hysteresys' \(valid keys: height_margin, hysteresis\)$",
+            r"estimator.yaml: unknown key 'contact.hysteresys' \(valid keys: height_margin, hysteresis, settle_time\)$",
+        ),
+        (
+            ("  settle_time: 0.015", "  settle_time: 0"),
+            r"estimator.yaml: contact: settle_time: 0.0 is not allowed, it must be a number > 0$",
         ),
         (("  max_gap: 0.5", ""), r"estimator.yaml: missing required key 'fault.max_gap'$"),
     ],
