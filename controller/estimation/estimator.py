@@ -5,7 +5,8 @@ p and velocity v and the two feet's contact points fl, fr, all in the world fram
 the prediction (world acceleration R a_imu + g, R the IMU's attitude); the leg kinematics correct
 it, each foot's position relative to the base (f - p = R r) and, for a foot on the ground, the base
 velocity it implies (v = -R (J dq + w x r)). A foot in the air gets a large process noise, so its
-contact point is taken afresh when it lands. x, y and z share one 4-state covariance (filter.py).
+contact point is taken afresh when it lands, once its impact has settled (contact.settle_time).
+x, y and z share one 4-state covariance (filter.py).
 
 Orientation is the IMU's attitude as measured, yaw included: its heading is the world's.
 """

@@ -184,13 +184,16 @@ def estimator_step(
     velocity_variance = p[VEL, VEL]  # the prediction's, before the corrections: the slip watch's yardstick
     r_foot, r_velocity = settings[Setting.FOOT_POSITION], settings[Setting.FOOT_VELOCITY]
     lowest, scale = min(left, right), settings[Setting.HEIGHT_SCALE]
-    left_gap, right_gap = left - lowest, right - lowest  # the higher foot's velocity counts for less, the higher it is
+    left_gap, right_gap = left - lowest, right - lowest
     correct(x, p, LEFT, POS, feet[0], r_foot)
     correct(x, p, RIGHT, POS, feet[1], r_foot)
-    r_left = r_velocity if left_stands else _SWING_VELOCITY_VARIANCE
-    r_right = r_velocity if right_stands else _SWING_VELOCITY_VARIANCE
-    correct(x, p, VEL, NO_ROW, implied[0], r_left * (1.0 + left_gap / scale) ** 2)
-    correct(x, p, VEL, NO_ROW, implied[1], r_right * (1.0 + right_gap / scale) ** 2)
+    # A standing foot's velocity counts for less the higher it sits above the lower standing foot (a foot rolling onto its
+    # toe or heel moves at its sole point); a landing foot, lower as it may be, is no reference: it is still sliding.
+    ground = min(left if left_stands else math.inf, right if right_stands else math.inf)
+    r_left = r_velocity * (1.0 + (left - ground) / scale) ** 2 if left_stands else _SWING_VELOCITY_VARIANCE
+    r_right = r_velocity * (1.0 + (right - ground) / scale) ** 2 if right_stands else _SWING_VELOCITY_VARIANCE
+    correct(x, p, VEL, NO_ROW, implied[0], r_left)
+    correct(x, p, VEL, NO_ROW, implied[1], r_right)
     outcome = _watch_slip(implied, velocity_prior, velocity_variance, left_gap, right_gap, dt, settings, memory)
     if outcome != Outcome.OK:
         return outcome
