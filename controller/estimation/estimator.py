@@ -54,7 +54,7 @@ class StateEstimator:
 
     def _load_compiled(self, joints: int) -> None:
         """Run the compiled update twice on a still, level reading, on scratch state: its first call loads the machine code
-        (0.3-0.8 s on the 2-core machine, from numba's cache), which belongs here, before the control loop, and not in its
+        (0.2-1 s on the 2-core machine, from numba's cache), which belongs here, before the control loop, and not in its
         first tick (a G1 over DDS goes limp after 0.1 s without a command; a later update would see a gap)."""
         k, x, p, memory = self.kinematics, np.zeros((4, 3)), np.zeros((4, 4)), fresh_memory()
         quat, zeros, accel, q = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.array([0.0, 0.0, self.config.gravity]), np.zeros(joints)

@@ -58,7 +58,7 @@ class Memory(IntEnum):
     SLIP_APART = 2  # m/s, low-pass filtered
     SLIP_CHI2 = 3  # low-pass filtered
     QUAT_NORM = 4  # the last attitude's length (a fault line reports it)
-    LEFT_LANDING = 5  # s: how long the foot is still landing (it joined contact less than the settle time ago); <= 0: settled
+    LEFT_LANDING = 5  # s: how long the foot is still landing (it joined contact less than the settle time ago); 0: settled
     RIGHT_LANDING = 6
 
 
@@ -184,7 +184,7 @@ def estimator_step(
     velocity_variance = p[VEL, VEL]  # the prediction's, before the corrections: the slip watch's yardstick
     r_foot, r_velocity = settings[Setting.FOOT_POSITION], settings[Setting.FOOT_VELOCITY]
     lowest, scale = min(left, right), settings[Setting.HEIGHT_SCALE]
-    left_gap, right_gap = left - lowest, right - lowest
+    left_gap, right_gap = left - lowest, right - lowest  # the slip watch's
     correct(x, p, LEFT, POS, feet[0], r_foot)
     correct(x, p, RIGHT, POS, feet[1], r_foot)
     # A standing foot's velocity counts for less the higher it sits above the lower standing foot (a foot rolling onto its

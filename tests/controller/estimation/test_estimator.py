@@ -178,7 +178,7 @@ print(time.perf_counter() - start, estimate.base_pos[0], estimate.base_pos[1])
 
 @pytest.mark.slow
 def test_the_first_update_in_a_fresh_process_costs_what_the_others_do() -> None:
-    """The compiled update is loaded when the estimator is made (0.3-0.8 s here), not at the control loop's first tick."""
+    """The compiled update is loaded when the estimator is made (0.2-1 s here), not at the control loop's first tick."""
     out = subprocess.run([sys.executable, "-c", FIRST_UPDATE], capture_output=True, text=True, check=True, timeout=120).stdout.split()
     seconds, x, y = (float(v) for v in out)
     assert seconds < 0.1, seconds
