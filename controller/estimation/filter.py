@@ -23,15 +23,24 @@ NO_ROW = -1  # `correct`'s `minus` when the measurement is one row of the state,
 
 @njit(cache=True)
 def predict(x: FloatArray, p: FloatArray, dt: float, accel: FloatArray, q: FloatArray) -> None:
-    """x' = F x + B a, P' = F P F^T + diag(q), in place on x (4, 3) and p (4, 4); F adds dt times the velocity (row 1)
-    to the position (row 0), B = (dt^2 / 2, dt, 0, 0): `accel` (3) drives the velocity."""
+    """x' = F x + B a, P' = F P F^T + Q, in place on x (4, 3) and p (4, 4); F adds dt times the velocity (row 1)
+    to the position (row 0), B = (dt^2 / 2, dt, 0, 0): `accel` (3) drives the velocity.
+
+    Q is diag(q) but for the velocity's noise, white noise on the acceleration, which the position integrates too: the
+    velocity gains q[1] = s dt (s its density), the position s dt^3 / 3 = q[1] dt^2 / 3 more, and the two covary by
+    s dt^2 / 2 = q[1] dt / 2 (the continuous white-noise acceleration model). Without that covariance a correction of
+    the velocity leaves the position as the acceleration sample moved it, and one sample a tick is a poor average of
+    a foot's impact (docs/estimation.md).
+    """
     half = 0.5 * dt * dt
     for axis in range(3):
         x[0, axis] += dt * x[1, axis] + half * accel[axis]
         x[1, axis] += dt * accel[axis]
-    p[0, 0] += dt * (2.0 * p[0, 1] + dt * p[1, 1])
-    for j in range(1, 4):
+    p[0, 0] += dt * (2.0 * p[0, 1] + dt * p[1, 1]) + q[1] * dt * dt / 3.0
+    p[0, 1] += dt * p[1, 1] + 0.5 * q[1] * dt
+    for j in range(2, 4):
         p[0, j] += dt * p[1, j]
+    for j in range(1, 4):
         p[j, 0] = p[0, j]
     for i in range(4):
         p[i, i] += q[i]

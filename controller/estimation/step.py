@@ -47,6 +47,7 @@ class Setting(IntEnum):
     SLIP_SPEED = 12
     SLIP_CHI2 = 13
     MAX_POSITION_STD = 14
+    SETTLE_TIME = 15
 
 
 class Memory(IntEnum):
@@ -57,6 +58,8 @@ class Memory(IntEnum):
     SLIP_APART = 2  # m/s, low-pass filtered
     SLIP_CHI2 = 3  # low-pass filtered
     QUAT_NORM = 4  # the last attitude's length (a fault line reports it)
+    LEFT_LANDING = 5  # s: how long the foot is still landing (it joined contact less than the settle time ago); 0: settled
+    RIGHT_LANDING = 6
 
 
 class Outcome(IntEnum):
@@ -91,6 +94,7 @@ def settings(config: EstimatorConfig) -> FloatArray:
         Setting.SLIP_SPEED: fault.slip_speed,
         Setting.SLIP_CHI2: fault.slip_chi2,
         Setting.MAX_POSITION_STD: fault.max_position_std,
+        Setting.SETTLE_TIME: contact.settle_time,
     }
     array = np.zeros(len(Setting))
     for setting, value in values.items():
@@ -99,7 +103,7 @@ def settings(config: EstimatorConfig) -> FloatArray:
 
 
 def fresh_memory() -> FloatArray:
-    """The memory of an estimator that has not updated yet: both feet down, no slip."""
+    """The memory of an estimator that has not updated yet: both feet down and settled, no slip."""
     memory = np.zeros(len(Memory))
     memory[Memory.LEFT_CONTACT] = memory[Memory.RIGHT_CONTACT] = 1.0
     return memory
@@ -164,6 +168,8 @@ def estimator_step(
         left, right, memory[Memory.LEFT_CONTACT] > 0.5, memory[Memory.RIGHT_CONTACT] > 0.5,
         settings[Setting.CONTACT_MARGIN], settings[Setting.CONTACT_HYSTERESIS],
     )  # fmt: skip
+    left_stands = _stands(left_down, memory[Memory.LEFT_CONTACT] > 0.5, Memory.LEFT_LANDING, dt, settings, memory)
+    right_stands = _stands(right_down, memory[Memory.RIGHT_CONTACT] > 0.5, Memory.RIGHT_LANDING, dt, settings, memory)
     memory[Memory.LEFT_CONTACT], memory[Memory.RIGHT_CONTACT] = (1.0 if left_down else 0.0), (1.0 if right_down else 0.0)
     if first:
         _start(feet, implied, left_down, right_down, settings, x, p)
@@ -171,20 +177,23 @@ def estimator_step(
 
     q = np.empty(4)
     q[POS], q[VEL] = settings[Setting.POSITION_RATE] * dt, settings[Setting.ACCEL_RATE] * dt
-    q[LEFT] = settings[Setting.STANCE_RATE if left_down else Setting.SWING_RATE] * dt
-    q[RIGHT] = settings[Setting.STANCE_RATE if right_down else Setting.SWING_RATE] * dt
+    q[LEFT] = settings[Setting.STANCE_RATE if left_stands else Setting.SWING_RATE] * dt
+    q[RIGHT] = settings[Setting.STANCE_RATE if right_stands else Setting.SWING_RATE] * dt
     predict(x, p, dt, accel, q)
     velocity_prior = x[VEL].copy()
     velocity_variance = p[VEL, VEL]  # the prediction's, before the corrections: the slip watch's yardstick
     r_foot, r_velocity = settings[Setting.FOOT_POSITION], settings[Setting.FOOT_VELOCITY]
     lowest, scale = min(left, right), settings[Setting.HEIGHT_SCALE]
-    left_gap, right_gap = left - lowest, right - lowest  # the higher foot's velocity counts for less, the higher it is
+    left_gap, right_gap = left - lowest, right - lowest  # the slip watch's
     correct(x, p, LEFT, POS, feet[0], r_foot)
     correct(x, p, RIGHT, POS, feet[1], r_foot)
-    r_left = r_velocity if left_down else _SWING_VELOCITY_VARIANCE
-    r_right = r_velocity if right_down else _SWING_VELOCITY_VARIANCE
-    correct(x, p, VEL, NO_ROW, implied[0], r_left * (1.0 + left_gap / scale) ** 2)
-    correct(x, p, VEL, NO_ROW, implied[1], r_right * (1.0 + right_gap / scale) ** 2)
+    # A standing foot's velocity counts for less the higher it sits above the lower standing foot (a foot rolling onto its
+    # toe or heel moves at its sole point); a landing foot, lower as it may be, is no reference: it is still sliding.
+    ground = min(left if left_stands else math.inf, right if right_stands else math.inf)
+    r_left = r_velocity * (1.0 + (left - ground) / scale) ** 2 if left_stands else _SWING_VELOCITY_VARIANCE
+    r_right = r_velocity * (1.0 + (right - ground) / scale) ** 2 if right_stands else _SWING_VELOCITY_VARIANCE
+    correct(x, p, VEL, NO_ROW, implied[0], r_left)
+    correct(x, p, VEL, NO_ROW, implied[1], r_right)
     outcome = _watch_slip(implied, velocity_prior, velocity_variance, left_gap, right_gap, dt, settings, memory)
     if outcome != Outcome.OK:
         return outcome
@@ -193,6 +202,17 @@ def estimator_step(
     if math.sqrt(p[POS, POS]) > settings[Setting.MAX_POSITION_STD]:
         return Outcome.DIVERGED.value
     return Outcome.OK.value
+
+
+@njit(cache=True)
+def _stands(down: bool, was_down: bool, landing: int, dt: float, settings: FloatArray, memory: FloatArray) -> bool:
+    """Whether a foot in contact (`down`; `was_down` at the last update) stands: it joined contact at least the settle time
+    ago. Until then it is landing, its impact still sliding it on; `memory[landing]` counts that time down."""
+    if not down:
+        memory[landing] = 0.0
+        return False
+    memory[landing] = max(memory[landing] - dt, 0.0) if was_down else settings[Setting.SETTLE_TIME]
+    return memory[landing] == 0.0
 
 
 @njit(cache=True)
