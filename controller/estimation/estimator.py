@@ -58,25 +58,12 @@ class StateEstimator:
         self._step(standing)
         self._step(replace(standing, time=0.02))
         self.reset()
-        self._load_compiled(len(joint_names))
 
     @classmethod
     def for_g1(cls, joint_names: Sequence[str], config_path: str | None = None, assets_dir: str | None = None) -> StateEstimator:
         """The estimator of the G1: settings from `config_path` (default: the shipped one), legs from the G1 model."""
         config = load_estimator_config(config_path)
         return cls(config, LegKinematics.from_mjcf(ensure_assets(assets_dir).g1_mjcf), joint_names)
-
-    def _load_compiled(self, joints: int) -> None:
-        """Run the compiled update twice on a still, level reading, on scratch state: its first call loads the machine code
-        (0.2-1 s on the 2-core machine, from numba's cache), which belongs here, before the control loop, and not in its
-        first tick (a G1 over DDS goes limp after 0.1 s without a command; a later update would see a gap)."""
-        k, x, p, memory = self.kinematics, np.zeros((4, 3)), np.zeros((4, 4)), fresh_memory()
-        quat, zeros, accel, q = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.array([0.0, 0.0, self.config.gravity]), np.zeros(joints)
-        for dt, first in ((0.0, True), (0.02, False)):
-            estimator_step(
-                quat, zeros, accel, q, q, self._legs, dt, first, k.constants, self._settings, x, p, memory,
-                k.foot_pos, k.foot_vel, k.jac_pos, k.jac_rot,
-            )  # fmt: skip
 
     def reset(self) -> None:
         """The next update starts a new estimate: at the origin (z from the stance legs), heading the IMU's."""
