@@ -64,7 +64,7 @@ CASES = (
     Case("waypoints_planner", "waypoints", "waypoints", planner=True),
     Case("walk_turn_stop_planner", "walk_turn_stop", "planner", planner=True),
     Case("drill_low_friction", "waypoints", "drill", perturb="low-friction"),
-    Case("drill_push", "waypoints", "drill", perturb="push"),
+    Case("drill_push", "waypoints", "drill", duration=60.0, perturb="push"),  # a shove every 4 s: the square takes longer
     Case("drill_imu_bias", "waypoints", "ride_through", faults="imu-bias"),
 )
 
