@@ -5,23 +5,32 @@ Failures become one `BusError` that names the bus and says what to check.
 
 from __future__ import annotations
 
+import errno
+
 import can
 import serial
 import serial.rs485
 
 from hw.errors import BusError
 from hw.jointmap import BusConfig
+from hw.slcan import SlcanBus
 
 
 def open_can(name: str, cfg: BusConfig) -> can.BusABC:
+    """The bus through python-can; `slcan` through `hw.slcan.SlcanBus` (batched writes, whole reads, an exclusive port)."""
     try:
+        if cfg.interface == "slcan":
+            return SlcanBus(cfg.channel, bitrate=cfg.bitrate, tty_baudrate=cfg.baudrate, open_delay=cfg.open_delay)
         return can.Bus(interface=cfg.interface, channel=cfg.channel, bitrate=cfg.bitrate, receive_own_messages=False)
     except (can.CanError, OSError, ValueError, ImportError) as exc:
-        hint = {
-            "socketcan": f"is '{cfg.channel}' up? (ip link set {cfg.channel} up type can bitrate {cfg.bitrate})",
-            "pcan": "is the PCAN driver installed and the adapter plugged in?",
-            "slcan": "is the serial adapter plugged in and the channel its device path?",
-        }.get(cfg.interface, "check the interface name and channel in the hardware config")
+        if cfg.interface == "socketcan" and getattr(exc, "errno", None) == errno.EAFNOSUPPORT:
+            hint = "this kernel has no SocketCAN (modprobe can_raw), or this container was not given it"
+        else:
+            hint = {
+                "socketcan": f"is '{cfg.channel}' up? (ip link set {cfg.channel} up type can bitrate {cfg.bitrate})",
+                "pcan": "is the PCAN driver installed and the adapter plugged in?",
+                "slcan": "is the adapter plugged in, the channel its device path, and no other program holding it?",
+            }.get(cfg.interface, "check the interface name and channel in the hardware config")
         raise BusError(f"cannot open CAN bus '{name}' ({cfg.interface}:{cfg.channel}): {exc}; {hint}") from exc
 
 
