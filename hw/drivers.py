@@ -22,7 +22,7 @@ from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
 from hw.slcan import SlcanBus
-from hw.transport import read_waiting
+from hw.transport import read_waiting, read_within
 
 CAN_ERR_CRTL = 0x04  # SocketCAN error classes (linux/can/error.h): controller problems
 CAN_ERR_BUSOFF = 0x40
@@ -287,9 +287,8 @@ class Rs485BusDriver(BusDriver):
     def _await_reply(self, motor_id: int, deadline: float) -> bool:
         while True:
             remaining = deadline - time.monotonic()
-            self.port.timeout = max(remaining, 0.0)
             try:
-                data = self.port.read(max(self.port.in_waiting, 1) if remaining > 0 else self.port.in_waiting)
+                data = read_within(self.port, max(remaining, 0.0))
             except (serial.SerialException, OSError) as exc:
                 self.bus_fault = f"serial port '{self.name}' read failed: {exc}"
                 return False

@@ -122,6 +122,9 @@ class HardwareConfig:
     imu_model: ImuModelConfig | None = None  # simulated only: the emulated IMU's noise and bias (None: the model's defaults)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     cycle_hz: float = CONTROL_CYCLE_HZ  # bus cycles per second: one command to and one reply from every motor
+    # Simulated only: the emulators and MuJoCo in a process of their own on the wall clock (g1ctl robot --buses), every
+    # bus a pseudo-terminal ('sim://pty'), CAN as an slcan adapter on one.
+    robot_process: bool = False
 
     def __post_init__(self) -> None:
         if not self.cycle_hz > 0:
@@ -168,7 +171,9 @@ def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOIN
 
 def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:
     check_imu_model(cfg.imu_model, cfg.simulated, source)
-    if cfg.simulated and not (CONTROL_CYCLE_HZ / cfg.cycle_hz).is_integer():
+    if cfg.robot_process:
+        check_robot_process(cfg, source)
+    elif cfg.simulated and not (CONTROL_CYCLE_HZ / cfg.cycle_hz).is_integer():
         raise ConfigError(
             f"{source}: cycle_hz: simulated buses cycle in lockstep with the {CONTROL_CYCLE_HZ:g} Hz physics, "
             f"so the rate must divide it (500, 250, 125, ...), got {cfg.cycle_hz:g}"
@@ -208,3 +213,14 @@ def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...],
             raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is shared with motors; give the IMU its own port")
     elif cfg.imu_model is not None:
         raise ConfigError(f"{source}: imu_model: this config has no IMU to model (add an 'imu' section with its serial bus)")
+
+
+def check_robot_process(cfg: HardwareConfig, source: str) -> None:
+    """A bus robot in its own process is simulated, and the process makes every port: a pseudo-terminal each."""
+    if not cfg.simulated:
+        raise ConfigError(f"{source}: robot_process: a robot process is a simulated one (simulated: true)")
+    for name, bus in cfg.buses.items():
+        where, given = ("channel", bus.channel) if bus.kind == "can" else ("port", bus.port)
+        if (bus.kind == "can" and bus.interface != "slcan") or given != "sim://pty":
+            wanted = "interface: slcan, channel: 'sim://pty'" if bus.kind == "can" else "port: 'sim://pty'"
+            raise ConfigError(f"{source}: buses.{name}: the robot process makes its ports ({wanted}), this one has {where} '{given}'")

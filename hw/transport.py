@@ -6,6 +6,8 @@ Failures become one `BusError` that names the bus and says what to check.
 from __future__ import annotations
 
 import errno
+import os
+import select
 
 import can
 import serial
@@ -57,3 +59,22 @@ def read_waiting(port: serial.SerialBase) -> bytes:
     """The bytes that have already arrived on `port` (b"" when none have); never waits."""
     waiting = port.in_waiting
     return bytes(port.read(waiting)) if waiting else b""
+
+
+def read_within(port: serial.SerialBase, timeout: float) -> bytes:
+    """What arrives on `port` within `timeout` s: all that has come once the first bytes are there (b"" when none came).
+    A device port is waited on directly (one select, one read): pyserial's own timed read reconfigures the port and asks
+    what is waiting first, three more system calls on every reply of a half-duplex bus. A port that hung up raises."""
+    if not isinstance(port, serial.Serial):  # a pyserial URL (loop://, socket://): its own timed read
+        port.timeout = timeout
+        return bytes(port.read(max(port.in_waiting, 1) if timeout > 0 else port.in_waiting))
+    fd = port.fileno()
+    if not select.select([fd], [], [], timeout)[0]:
+        return b""
+    try:
+        data = os.read(fd, 4096)
+    except BlockingIOError:
+        return b""
+    if not data:
+        raise serial.SerialException(f"{port.port}: the device hung up")
+    return data

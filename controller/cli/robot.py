@@ -1,6 +1,11 @@
 """`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5] [--motion-mode ai]
 [--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad] [--joint-map CONFIG]
-[--seed N]`: a simulated G1 in its own process on the robot's DDS topics."""
+[--seed N]`: a simulated G1 in its own process on the robot's DDS topics.
+
+`g1ctl robot --buses sim-can-process|sim-mixed-process|PATH [--faults PLAN] [--truth-socket PATH] [--gantry] [--duration S]
+[--seed N]`: the G1 in MuJoCo behind the firmware emulators of a bus config, in its own process on the wall clock; its
+serial ports and slcan CAN adapters are pseudo-terminals, printed as one JSON line (`{"ready": true, "buses": {...}}`) for
+a host to open (`g1ctl run --hardware` with the same config starts one itself)."""
 
 from __future__ import annotations
 
@@ -15,8 +20,14 @@ from hw.errors import ConfigError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    robot = sub.add_parser("robot", help="a simulated G1 in its own process, on the robot's DDS topics")
+    robot = sub.add_parser("robot", help="a simulated G1 in its own process, on the robot's DDS topics or behind CAN and serial buses")
     robot.add_argument("--dds", action="store_true", help="speak the G1's low-level DDS protocol (rt/lowcmd, rt/lowstate)")
+    robot.add_argument(
+        "--buses", default=None, metavar="CONFIG",
+        help="a bus robot's hardware config (sim-can-process, sim-mixed-process): its buses as pseudo-terminals, CAN over slcan",
+    )  # fmt: skip
+    robot.add_argument("--faults", default=None, metavar="PLAN", help="with --buses: a fault plan for its buses (configs/faults/)")
+    robot.add_argument("--truth-socket", default=None, metavar="PATH", help="with --buses: send the ground truth to this UNIX socket")
     robot.add_argument("--domain", type=int, default=1, help="DDS domain (the real robot uses 0)")
     robot.add_argument("--interface", default="lo", help="network interface")
     robot.add_argument("--duration", type=float, default=None, help="seconds to run (default: until stopped)")
@@ -43,8 +54,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    if not args.dds:
-        raise ConfigError("g1ctl robot needs a protocol: --dds (the G1's low-level DDS topics)")
+    if args.dds == (args.buses is not None):
+        raise ConfigError("g1ctl robot needs one protocol: --dds (the G1's low-level DDS topics) or --buses CONFIG (CAN and serial)")
+    if args.buses is not None:
+        return _bus_robot(args)
+    if args.faults is not None or args.truth_socket is not None:
+        raise ConfigError("--faults and --truth-socket are for --buses; a robot over DDS takes --fault KIND@SECONDS and --truth")
     from controller.assets import ensure_assets  # noqa: PLC0415
     from hw.dds.session import DdsConfig  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import LowLevelConfig  # noqa: PLC0415
@@ -84,3 +99,20 @@ def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | No
         except ConfigError as exc:
             raise ConfigError(f"--remote {name}: at {step.t:g} s, {exc}") from exc
     return remote_feed(source, limits)
+
+
+def _bus_robot(args: argparse.Namespace) -> int:
+    """The bus robot: its ports on stdout as soon as they are open, its counters when it stops."""
+    from controller.assets import ensure_assets  # noqa: PLC0415
+    from sim.bus_robot import BusRobotConfig, load_bus_robot, run_bus_robot  # noqa: PLC0415 - MuJoCo
+
+    refused = [flag for flag, given in (("--fault", args.fault), ("--remote", args.remote), ("--lockstep", args.lockstep)) if given]
+    if refused:
+        raise ConfigError(f"{', '.join(refused)}: for a robot over DDS (--dds); a bus robot's faults are a plan: --faults PLAN")
+    load_bus_robot(args.buses)  # a config that is no bus robot's: one line before MuJoCo loads
+    cfg = BusRobotConfig(
+        mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, hardware=args.buses, faults=args.faults, seed=args.seed,
+        duration_s=args.duration, truth=args.truth_socket, gantry=args.gantry,
+    )  # fmt: skip
+    print(json.dumps(run_bus_robot(cfg, lambda ready: print(json.dumps(ready), flush=True))))
+    return 0

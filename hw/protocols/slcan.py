@@ -51,7 +51,7 @@ def open_commands(bitrate: int) -> bytes:
     return b"C\r" + BITRATE_COMMANDS[bitrate] + b"\rO\r"
 
 
-def encode_frame(arbitration_id: int, data: bytes, extended: bool = False) -> bytes:
+def encode_frame(arbitration_id: int, data: bytes | bytearray, extended: bool = False) -> bytes:
     """One data frame as its line, carriage return included."""
     if len(data) > 8:
         raise ValueError(f"a classic CAN frame carries at most 8 bytes, got {len(data)}")

@@ -23,6 +23,7 @@ from controller.assets import Assets
 from controller.cli.main import main
 from controller.runtime.backend import Backend
 from controller.runtime.backend_registry import BACKENDS, backend_entry, choose_backend, robot_kind
+from controller.runtime.bus_process import BusProcessBackend
 from controller.runtime.dds_backend import RealDdsBackend, SimulatedDdsBackend
 from controller.runtime.driver import run
 from controller.runtime.hardware_backend import RealBusesBackend
@@ -38,10 +39,11 @@ from tests.conftest import a_robot_config, g1ctl
 
 # What each config kind is driven by; the shipped configs name all but real buses (your own config: `a_real_bus_config`).
 SHIPPED_KINDS = {None: "simulator", "sim-can": "simulated-buses", "sim-mixed": "simulated-buses", "sim-dds": "simulated-dds",
-                 "g1-dds": "real-dds"}  # fmt: skip
+                 "g1-dds": "real-dds", "sim-can-process": "simulated-buses-process",
+                 "sim-mixed-process": "simulated-buses-process"}  # fmt: skip
 BACKEND_CLASSES: dict[str, type[Backend]] = {
     "simulator": DirectSimBackend, "simulated-buses": SimulatedHardwareBackend, "simulated-dds": SimulatedDdsBackend,
-    "real-dds": RealDdsBackend, "real-buses": RealBusesBackend,
+    "real-dds": RealDdsBackend, "real-buses": RealBusesBackend, "simulated-buses-process": BusProcessBackend,
 }  # fmt: skip
 
 
