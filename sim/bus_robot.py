@@ -37,7 +37,8 @@ import numpy as np
 from hw.emulation.faults import load_fault_file, load_faults
 from hw.emulation.rig import SimulatedHardware
 from hw.errors import ConfigError
-from hw.jointmap import HardwareConfig, load_hardware_config
+from hw.jointmap import HardwareConfig, hardware_config_path, load_hardware_config
+from hw.yamlconfig import load_yaml
 from sim.hardware_twin import MuJoCoPlant
 from sim.robot import SimRobot
 from sim.world import build_model
@@ -64,6 +65,21 @@ def load_bus_robot(name: str) -> HardwareConfig:
     if not cfg.robot_process:
         raise ConfigError(f"hardware config '{name}' is not a bus robot of its own process (robot_process: true): use sim-can-process")
     return cfg
+
+
+def real_robot_yaml(name: str, ports: dict[str, str]) -> dict[str, Any]:
+    """The bus robot's config (name or path) as a real robot's, on the ports it opened: `g1ctl run --hardware` with it
+    drives the robot process as it would drive real adapters and serial ports (the registry's `real-buses`: no ground
+    truth, no simulator in the run). Its YAML as written, with the ports, `simulated: false`, and no `imu_model`
+    (a real IMU brings its own noise)."""
+    data = dict(load_yaml(hardware_config_path(name)))
+    buses = {bus: dict(fields) for bus, fields in data["buses"].items()}
+    for bus, fields in buses.items():
+        fields["channel" if fields["kind"] == "can" else "port"] = ports[bus]
+    data.pop("imu_model", None)
+    data.pop("robot_process", None)
+    return {**data, "description": f"{data.get('description', name)} (the robot process's ports, as a real robot's)",
+            "simulated": False, "buses": buses}  # fmt: skip
 
 
 def run_bus_robot(cfg: BusRobotConfig, announce: Callable[[dict[str, Any]], None]) -> dict[str, Any]:

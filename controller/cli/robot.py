@@ -2,10 +2,11 @@
 [--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad] [--joint-map CONFIG]
 [--seed N]`: a simulated G1 in its own process on the robot's DDS topics.
 
-`g1ctl robot --buses sim-can-process|sim-mixed-process|PATH [--faults PLAN] [--truth-socket PATH] [--gantry] [--duration S]
-[--seed N]`: the G1 in MuJoCo behind the firmware emulators of a bus config, in its own process on the wall clock; its
-serial ports and slcan CAN adapters are pseudo-terminals, printed as one JSON line (`{"ready": true, "buses": {...}}`) for
-a host to open (`g1ctl run --hardware` with the same config starts one itself)."""
+`g1ctl robot --buses sim-can-process|sim-mixed-process|PATH [--faults PLAN] [--truth-socket PATH] [--host-config PATH]
+[--gantry] [--duration S] [--seed N]`: the G1 in MuJoCo behind the firmware emulators of a bus config, in its own process
+on the wall clock; its serial ports and slcan CAN adapters are pseudo-terminals, printed as one JSON line
+(`{"ready": true, "buses": {...}}`) for a host to open (`g1ctl sim --hardware` with the same config starts one itself;
+`--host-config` writes a real robot's config on its ports, for `g1ctl run --hardware`)"""
 
 from __future__ import annotations
 
@@ -14,6 +15,8 @@ import dataclasses
 import json
 from collections.abc import Callable
 from contextlib import ExitStack
+from pathlib import Path
+from typing import Any
 
 from hw.emulation.g1_faults import KINDS, RobotFault
 from hw.errors import ConfigError
@@ -28,6 +31,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )  # fmt: skip
     robot.add_argument("--faults", default=None, metavar="PLAN", help="with --buses: a fault plan for its buses (configs/faults/)")
     robot.add_argument("--truth-socket", default=None, metavar="PATH", help="with --buses: send the ground truth to this UNIX socket")
+    robot.add_argument(
+        "--host-config", type=Path, default=None, metavar="PATH",
+        help="with --buses: write a real robot's config on this robot's ports (g1ctl run --hardware PATH drives it as real buses)",
+    )  # fmt: skip
     robot.add_argument("--domain", type=int, default=1, help="DDS domain (the real robot uses 0)")
     robot.add_argument("--interface", default="lo", help="network interface")
     robot.add_argument("--duration", type=float, default=None, help="seconds to run (default: until stopped)")
@@ -58,8 +65,8 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("g1ctl robot needs one protocol: --dds (the G1's low-level DDS topics) or --buses CONFIG (CAN and serial)")
     if args.buses is not None:
         return _bus_robot(args)
-    if args.faults is not None or args.truth_socket is not None:
-        raise ConfigError("--faults and --truth-socket are for --buses; a robot over DDS takes --fault KIND@SECONDS and --truth")
+    if args.faults is not None or args.truth_socket is not None or args.host_config is not None:
+        raise ConfigError("--faults, --truth-socket and --host-config are for --buses; over DDS: --fault KIND@SECONDS and --truth")
     from controller.assets import ensure_assets  # noqa: PLC0415
     from hw.dds.session import DdsConfig  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import LowLevelConfig  # noqa: PLC0415
@@ -103,8 +110,10 @@ def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | No
 
 def _bus_robot(args: argparse.Namespace) -> int:
     """The bus robot: its ports on stdout as soon as they are open, its counters when it stops."""
+    import yaml  # noqa: PLC0415
+
     from controller.assets import ensure_assets  # noqa: PLC0415
-    from sim.bus_robot import BusRobotConfig, load_bus_robot, run_bus_robot  # noqa: PLC0415 - MuJoCo
+    from sim.bus_robot import BusRobotConfig, load_bus_robot, real_robot_yaml, run_bus_robot  # noqa: PLC0415 - MuJoCo
 
     refused = [flag for flag, given in (("--fault", args.fault), ("--remote", args.remote), ("--lockstep", args.lockstep)) if given]
     if refused:
@@ -114,5 +123,13 @@ def _bus_robot(args: argparse.Namespace) -> int:
         mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, hardware=args.buses, faults=args.faults, seed=args.seed,
         duration_s=args.duration, truth=args.truth_socket, gantry=args.gantry,
     )  # fmt: skip
-    print(json.dumps(run_bus_robot(cfg, lambda ready: print(json.dumps(ready), flush=True))))
+
+    def announce(ready: dict[str, Any]) -> None:
+        if args.host_config is not None:  # written before the announcement: a host that reads it finds the file
+            args.host_config.parent.mkdir(parents=True, exist_ok=True)
+            args.host_config.write_text(yaml.safe_dump(real_robot_yaml(args.buses, ready["buses"]), sort_keys=False, width=200))
+            ready = {**ready, "host_config": str(args.host_config)}
+        print(json.dumps(ready), flush=True)
+
+    print(json.dumps(run_bus_robot(cfg, announce)))
     return 0

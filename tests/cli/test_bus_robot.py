@@ -144,3 +144,33 @@ def test_the_robot_process_announces_its_ports_and_answers_on_them() -> None:
         out, _ = robot.communicate(timeout=30)
     counters = json.loads(out.strip().splitlines()[-1])
     assert robot.returncode == 0 and counters["frames_in"] == 1 and counters["steps"] == 0  # nothing held a joint: no physics
+
+
+def test_g1ctl_run_drives_the_robot_process_as_a_real_robot_on_its_ports(tmp_path: Path) -> None:
+    """Issue 22 point 2 end to end: a real robot's config (`simulated: false`, slcan adapters and a serial IMU by path)
+    run by `g1ctl run`: the registry's real-buses backend, no simulator in the run, cycles at the config's rate."""
+    config, report_path = tmp_path / "my-robot.yaml", tmp_path / "report.json"
+    robot = subprocess.Popen(
+        [*G1CTL, "robot", "--buses", "sim-can-process", "--host-config", str(config), "--duration", "60"], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert robot.stdout is not None
+        ready = json.loads(robot.stdout.readline())
+        assert ready["host_config"] == str(config)
+        real = load_hardware_config(str(config))
+        assert not real.simulated and not real.robot_process and real.imu_model is None
+        assert {name: bus.channel or bus.port for name, bus in real.buses.items()} == ready["buses"]
+        args = ("--hardware", str(config), "--input", "scripted", "--no-planner", "--duration", "4", "--report", str(report_path))
+        result = g1ctl("run", *args)
+    finally:
+        robot.send_signal(signal.SIGTERM)
+        out, _ = robot.communicate(timeout=30)
+    assert result.returncode == 0, result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["backend"] == "real-buses" and report["final_mode"] == "run" and report["falls"] == 0
+    assert "final_base_position" not in report and "real_time_factor" not in report  # no simulator stands behind it here
+    hw = report["hw"]
+    assert hw["rate_hz"] == 250.0 and hw["cycle_period_ms"]["target"] == 4.0 and abs(hw["cycle_period_ms"]["p50"] - 4.0) < 0.2
+    assert hw["faults"] == 0 and hw["state"] == "closed" and 800 < hw["cycles"] + hw["missed_cycles"] <= 1100
+    counters = json.loads(out.strip().splitlines()[-1])
+    assert counters["frames_in"] == hw["frames_sent"] and counters["wire"]["outside_limits"] == 0 and counters["steps"] > 1000

@@ -122,7 +122,10 @@ def test_the_plan_decides_tracker_estimator_and_clock() -> None:
     [
         (RunConfig(hardware="g1-dds", video=Path("v.mp4"), picture=Path("p.png")), "--video, --picture: not on a real robot (they need"),
         (RunConfig(hardware="g1-dds", faults="dds-stale"), "--faults: not on a real robot (they need the simulator)"),
-        (RunConfig(rt_priority=50), "--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy)"),
+        (
+            RunConfig(rt_priority=50),
+            "--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy, or your robot's bus config)",
+        ),
         (RunConfig(hardware="sim-dds", perturbations=Perturbations()), "--perturb needs the physics in this process"),
         (RunConfig(faults="lossy-can"), "--faults needs --hardware: faults are injected into simulated hardware"),
         (RunConfig(hardware="sim-can", faults="dds-stale"), "'robot:' faults are for a simulated G1 over DDS"),

@@ -20,9 +20,12 @@ import serial
 
 from controller.runtime.hardware_backend import RealBusesBackend
 from controller.runtime.loop import RunClock
+from controller.runtime.run_config import RunConfig
+from controller.runtime.run_plan import resolve_run
 from hw import g1
 from hw.emulation.plant import StaticPlant
 from hw.emulation.rig import SimulatedHardware
+from hw.errors import ConfigError
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import HardwareConfig, load_hardware_config
 from hw.shipped import config_dir
@@ -129,3 +132,14 @@ def test_an_interface_that_cannot_be_opened_is_refused_in_one_line_with_nothing_
         assert nothing_arrived(left)
     finally:
         holder.close()
+
+
+def test_real_buses_take_real_time_scheduling_and_refuse_what_needs_a_simulator(tmp_path: Path) -> None:
+    config = str(a_real_robot_config(tmp_path, {}))
+    plan = resolve_run(RunConfig(hardware=config, input="scripted", rt_priority=50, cpu=0))
+    assert plan.backend.name == "real-buses" and (plan.rt_priority, plan.cpu, plan.clock, plan.estimator) == (50, 0, "wall", True)
+    for option, message in (({"video": Path("v.mp4")}, "--video: not on a real robot"), ({"faults": "nan-command"}, "--faults: not")):
+        with pytest.raises(ConfigError, match=message):
+            resolve_run(RunConfig(hardware=config, **option))  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="--rt-priority and --cpu are for a real robot's run"):
+        resolve_run(RunConfig(hardware="sim-can-process", rt_priority=50))
