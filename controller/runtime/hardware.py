@@ -1,8 +1,10 @@
 """Open a hardware config for bring-up: real buses, or simulated hardware with MuJoCo behind it.
 
 `open_hardware` yields a configured `HardwareRobot` and a `pump` that runs one bus cycle:
-paced at 500 Hz on the wall clock for real hardware; for a config marked `simulated`,
-one physics step of the G1 hanging in a virtual gantry (MuJoCo is imported only then).
+paced at the config's `cycle_hz` on the wall clock for real hardware, and for the bus robot in
+its own process (`robot_process: true`: `g1ctl robot --buses --gantry` started, its ports opened
+as a real robot's); for a config marked `simulated`, one physics step of the G1 hanging in a
+virtual gantry (MuJoCo is imported only then).
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 
 from controller.runtime.loop import WallClock
-from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot
 from hw.jointmap import load_hardware_config
 
@@ -22,7 +23,13 @@ GANTRY_HEIGHT_M = 0.25
 def open_hardware(name: str, assets_dir: str | None = None, require_all: bool = True) -> Iterator[tuple[HardwareRobot, Callable[[], None]]]:
     cfg = load_hardware_config(name)
     with ExitStack() as stack:
-        if cfg.simulated:
+        if cfg.robot_process:
+            from controller.runtime.bus_process import BusRobotProcess, host_config  # noqa: PLC0415
+
+            robot_process = BusRobotProcess(name, assets_dir, extra_args=("--gantry",))
+            stack.callback(robot_process.stop)
+            cfg = host_config(cfg, robot_process.ports)
+        if cfg.simulated and not cfg.robot_process:
             from controller.assets import ensure_assets  # noqa: PLC0415
             from hw.emulation.rig import SimulatedHardware  # noqa: PLC0415
             from sim.hardware_twin import MuJoCoPlant  # noqa: PLC0415 - MuJoCo only for simulated hardware
@@ -47,7 +54,7 @@ def open_hardware(name: str, assets_dir: str | None = None, require_all: bool = 
 
             def pump() -> None:
                 host.cycle()
-                deadline[0] = max(deadline[0] + 1.0 / CONTROL_CYCLE_HZ, clock.now())
+                deadline[0] = max(deadline[0] + 1.0 / cfg.cycle_hz, clock.now())
                 clock.sleep_until(deadline[0])
 
             host.configure(require_all=require_all)

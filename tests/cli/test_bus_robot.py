@@ -174,3 +174,13 @@ def test_g1ctl_run_drives_the_robot_process_as_a_real_robot_on_its_ports(tmp_pat
     assert hw["faults"] == 0 and hw["state"] == "closed" and 800 < hw["cycles"] + hw["missed_cycles"] <= 1100
     counters = json.loads(out.strip().splitlines()[-1])
     assert counters["frames_in"] == hw["frames_sent"] and counters["wire"]["outside_limits"] == 0 and counters["steps"] > 1000
+
+
+def test_bring_up_commands_open_the_robot_process_as_real_buses() -> None:
+    scan = g1ctl("hw", "scan", "--hardware", "sim-mixed-process")
+    assert scan.returncode == 0, scan.stderr
+    rows = [line.split() for line in scan.stdout.splitlines()[1:-1]]
+    assert len(rows) == 29 and all(row[3] == "True" for row in rows), scan.stdout  # every motor answered, RS-485 and slcan
+    assert scan.stdout.strip().endswith("29/29 motors answered")
+    sweep = g1ctl("hw", "sweep", "--hardware", "sim-can-process", "--joint", "left_elbow_joint", "--fraction", "0.1", "--yes")
+    assert sweep.returncode == 0 and json.loads(sweep.stdout.strip().splitlines()[-1])["completed"], sweep.stdout + sweep.stderr
