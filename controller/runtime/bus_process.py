@@ -89,19 +89,22 @@ class BusRobotProcess:
         """The robot's announcement of its ports; a robot that exits or stays silent first is a HardwareFault saying why."""
         stdout = self.process.stdout
         assert stdout is not None
-        ready, _, _ = select.select([stdout], [], [], timeout)
-        line = stdout.readline() if ready else ""
-        try:
-            announced: dict[str, Any] = json.loads(line) if line else {}
-        except json.JSONDecodeError:
-            announced = {}
-        if announced.get("ready"):
-            return announced
-        if self.process.poll() is None and not line:
-            raise HardwareFault(f"the robot process (g1ctl robot --buses, pid {self.pid}) was not ready within {timeout:g} s")
+        deadline = time.monotonic() + timeout
+        while True:
+            if not select.select([stdout], [], [], max(deadline - time.monotonic(), 0.0))[0]:
+                raise HardwareFault(f"the robot process (g1ctl robot --buses, pid {self.pid}) was not ready within {timeout:g} s")
+            line = stdout.readline()
+            if not line:
+                break  # it ended
+            try:
+                announced = json.loads(line)
+            except json.JSONDecodeError:
+                continue  # something else it printed first
+            if isinstance(announced, dict) and announced.get("ready"):
+                return announced
         self.stop()
         tail = "; ".join(self.report.get("stderr_tail", [])) if self.report else ""
-        raise HardwareFault(f"the robot process (g1ctl robot --buses) ended before it was ready ({self.ended()}): {tail or line.strip()}")
+        raise HardwareFault(f"the robot process (g1ctl robot --buses) ended before it was ready ({self.ended()}): {tail or 'no message'}")
 
     def ended(self) -> str | None:
         """How the process ended ("exit code 3", "killed by SIGKILL"); None while it runs."""

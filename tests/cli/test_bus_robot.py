@@ -15,6 +15,8 @@ from pathlib import Path
 import can
 import pytest
 
+from controller.runtime.bus_process import BusRobotProcess
+from hw.errors import HardwareFault
 from hw.jointmap import load_hardware_config
 from hw.slcan import SlcanBus
 from tests.conftest import G1CTL, g1ctl, one_line_error, wait_for
@@ -184,3 +186,8 @@ def test_bring_up_commands_open_the_robot_process_as_real_buses() -> None:
     assert scan.stdout.strip().endswith("29/29 motors answered")
     sweep = g1ctl("hw", "sweep", "--hardware", "sim-can-process", "--joint", "left_elbow_joint", "--fraction", "0.1", "--yes")
     assert sweep.returncode == 0 and json.loads(sweep.stdout.strip().splitlines()[-1])["completed"], sweep.stdout + sweep.stderr
+
+
+def test_a_robot_process_that_ends_before_it_is_ready_is_a_fault_saying_why() -> None:
+    with pytest.raises(HardwareFault, match=r"ended before it was ready \(exit code 2\): g1ctl: error: unknown fault plan 'no-such-plan'"):
+        BusRobotProcess("sim-can-process", faults="no-such-plan")
