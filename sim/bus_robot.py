@@ -160,7 +160,7 @@ class _Server:
         self.steps += 1
         if self._truth is not None and self.cfg.truth is not None and self.steps % TRUTH_EVERY == 0:
             data = self.robot.data
-            sample = np.concatenate(([data.time], data.qpos, data.qvel)).tobytes()
+            sample = np.concatenate(([time.monotonic(), data.time], data.qpos, data.qvel)).tobytes()  # the clock is the machine's
             try:
                 self._truth.sendto(sample, self.cfg.truth)
                 self.truth_sent += 1

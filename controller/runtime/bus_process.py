@@ -49,9 +49,12 @@ if TYPE_CHECKING:
 
 READY_TIMEOUT_S = 60.0  # the robot process loads MuJoCo first: seconds on a cold, busy machine
 STOP_TIMEOUT_S = 10.0
-SILENT_AFTER_S = 0.03  # no ground truth (sent every 10 ms) for this long from a robot process that is alive: it stopped answering
+# A robot process that is alive has stopped answering when its newest ground truth (sent every 10 ms) is this old: at all,
+# or when every motor fell silent at once. Its age is measured on the send stamp, so a host held back itself is not fooled.
+STOPPED_AFTER_S = 0.1
+SILENT_AFTER_S = 0.015
 WATCH_AFTER_CLOSE_S = 0.05  # the robot's motors take the host's last frames (damping, motor mode off) before it stops
-TRUTH_SIZE = 1 + g1.QPOS_SIZE + g1.QVEL_SIZE  # time, qpos, qvel (float64)
+TRUTH_SIZE = 2 + g1.QPOS_SIZE + g1.QVEL_SIZE  # when it was sent (the machine's monotonic clock), time, qpos, qvel (float64)
 
 
 class BusRobotProcess:
@@ -173,7 +176,7 @@ class BusProcessBackend(PacedBusBackend):
             raise
         super().__init__(host, config_name, cfg.cycle_hz, clock)
         self.truth_time: float | None = None
-        self._truth_wall: float | None = None  # when the newest ground truth arrived
+        self._truth_sent: float | None = None  # when the robot sent its newest ground truth (the machine's monotonic clock)
         self._soft_start: float | None = None  # run time the robot's physics clock counts from (about)
         if faults is not None and faults.host.start_s is not None:
             self.robot: RobotInterface = FaultyCommands(host, faults.host, self._robot_time)
@@ -200,9 +203,9 @@ class BusProcessBackend(PacedBusBackend):
         if newest is None or len(newest) != 8 * TRUTH_SIZE:
             return
         sample = np.frombuffer(newest, dtype=np.float64)
-        qpos, qvel = sample[1 : 1 + g1.QPOS_SIZE], sample[1 + g1.QPOS_SIZE :]
-        self.mirror.mirror(qpos, qvel, float(sample[0]))
-        self.truth_time, self._truth_wall = float(sample[0]), time.monotonic()
+        qpos, qvel = sample[2 : 2 + g1.QPOS_SIZE], sample[2 + g1.QPOS_SIZE :]
+        self.mirror.mirror(qpos, qvel, float(sample[1]))
+        self._truth_sent, self.truth_time = float(sample[0]), float(sample[1])
 
     def truth(self) -> RobotState:
         return self.mirror.read()
@@ -227,9 +230,9 @@ class BusProcessBackend(PacedBusBackend):
         if ended is not None:
             return f"{name} died ({ended})"
         self._follow_truth()
-        silent_s = time.monotonic() - self._truth_wall if self._truth_wall is not None else 0.0
-        if silent_s > SILENT_AFTER_S or (self.host.store.missed > 0).all():  # its ground truth stopped, or every bus at once
-            return f"{name} stopped answering (every motor silent, no ground truth for {1e3 * silent_s:.0f} ms)"
+        silent_s = time.monotonic() - self._truth_sent if self._truth_sent is not None else 0.0
+        if silent_s > STOPPED_AFTER_S or (silent_s > SILENT_AFTER_S and (self.host.store.missed > 0).all()):
+            return f"{name} stopped answering (no ground truth for {1e3 * silent_s:.0f} ms)"
         return None
 
     def report(self) -> dict[str, Any]:
