@@ -21,7 +21,8 @@ import serial
 from hw.feedback import FeedbackStore, MitReplyBank
 from hw.protocols import mit
 from hw.protocols import unitree_rs485 as rs485
-from hw.transport import read_waiting
+from hw.slcan import SlcanBus
+from hw.transport import read_waiting, read_within
 
 CAN_ERR_CRTL = 0x04  # SocketCAN error classes (linux/can/error.h): controller problems
 CAN_ERR_BUSOFF = 0x40
@@ -121,9 +122,13 @@ class MitBusDriver(BusDriver):
                 msg.data = bytearray(batch[8 * k : 8 * k + 8])
             self._loaded = batch
         try:
-            for msg in self._messages:
-                send(msg)
-                sent += 1
+            if isinstance(self.bus, SlcanBus):  # one write for the whole batch: the adapter's serial link takes it at once
+                self.bus.send_batch(self._messages)
+                sent = len(self._messages)
+            else:
+                for msg in self._messages:
+                    send(msg)
+                    sent += 1
         except can.CanError as exc:
             self.counters.send_errors += 1
             self.bus_fault = f"CAN bus '{self.name}' send failed: {exc}"
@@ -144,7 +149,7 @@ class MitBusDriver(BusDriver):
         """File replies until every awaited motor answered or the wall-clock `deadline` passes."""
         awaiting = self._awaiting
         while awaiting:
-            msg = self.bus.recv(timeout=max(deadline - time.monotonic(), 0.0))
+            msg = self._recv(max(deadline - time.monotonic(), 0.0))
             if msg is None:
                 break
             self._take(msg)
@@ -158,8 +163,17 @@ class MitBusDriver(BusDriver):
         """Before a send: take what arrived since the last collect (late replies, error frames).
         MIT replies carry no sequence number, so a late reply left queued would stand in for
         the next command's reply, and every cycle after would read the one before it."""
-        while (msg := self.bus.recv(timeout=0.0)) is not None:
+        while (msg := self._recv(0.0)) is not None:
             self._take_late(msg)
+
+    def _recv(self, timeout: float) -> can.Message | None:
+        """The next frame within `timeout`; None also when the interface failed (a USB adapter pulled, the far end of a
+        pseudo-terminal gone): that is the bus's fault, which latches damping."""
+        try:
+            return self.bus.recv(timeout=timeout)
+        except can.CanError as exc:
+            self.bus_fault = f"CAN bus '{self.name}' receive failed: {exc}"
+            return None
 
     def collect_now(self, timeout: float) -> None:
         self.collect(time.monotonic() + timeout)
@@ -273,9 +287,8 @@ class Rs485BusDriver(BusDriver):
     def _await_reply(self, motor_id: int, deadline: float) -> bool:
         while True:
             remaining = deadline - time.monotonic()
-            self.port.timeout = max(remaining, 0.0)
             try:
-                data = self.port.read(max(self.port.in_waiting, 1) if remaining > 0 else self.port.in_waiting)
+                data = read_within(self.port, max(remaining, 0.0))
             except (serial.SerialException, OSError) as exc:
                 self.bus_fault = f"serial port '{self.name}' read failed: {exc}"
                 return False

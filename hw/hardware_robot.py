@@ -67,7 +67,8 @@ class HardwareRobot(LifecycleRobot):
         if self.state is not Lifecycle.UNCONFIGURED:
             raise LifecycleError(f"configure needs the robot unconfigured, it is {self.state.value}")
         try:
-            self._open()
+            if not self._drivers:
+                self._open()
             missing = self._discover()
         except Exception:
             self._close_buses()
@@ -76,6 +77,19 @@ class HardwareRobot(LifecycleRobot):
             self._close_buses()
             raise MotorNotFoundError(f"motors did not answer: {', '.join(missing)}; check power, wiring, ids and bitrate")
         self.state = Lifecycle.INACTIVE
+
+    def open(self) -> None:
+        """Open every bus and port of the config, and speak to no motor yet (`configure` opens them if this was not
+        called). A bus that cannot be opened is one `BusError` naming it and why; the ones already open are closed."""
+        if self.state is not Lifecycle.UNCONFIGURED:
+            raise LifecycleError(f"open needs the robot unconfigured, it is {self.state.value}")
+        if self._drivers:
+            return
+        try:
+            self._open()
+        except Exception:
+            self._close_buses()
+            raise
 
     def _open(self) -> None:
         models = load_motor_models()

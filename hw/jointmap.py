@@ -16,8 +16,9 @@ from typing import Literal
 from hw.dds.config import DdsHardwareConfig, check_imu_model, dds_config_from, is_dds_config
 from hw.emulation.imu_model import ImuModelConfig
 from hw.errors import ConfigError
-from hw.g1 import DAMPING_KD, JOINT_NAMES
+from hw.g1 import CONTROL_CYCLE_HZ, DAMPING_KD, JOINT_NAMES
 from hw.joint_overrides import check_within_g1_limits, with_g1_joint_table
+from hw.protocols import slcan
 from hw.protocols.mit import MitRanges
 from hw.shipped import config_dir
 from hw.yamlconfig import check_position_limits, from_dict, load_yaml, preset_names, resolve_preset
@@ -32,14 +33,17 @@ class BusConfig:
     channel: str = ""  # can: can0, PCAN_USBBUS1, ...
     bitrate: int = 1_000_000
     port: str = ""  # serial: /dev/ttyUSB0, loop://, ...
-    baudrate: int = 4_000_000
+    baudrate: int = 4_000_000  # serial, and the serial link of an slcan adapter
     rs485: bool = False  # serial: drive RTS for the transceiver direction (kernel RS-485 mode)
+    open_delay: float = 0.0  # can over slcan: seconds to wait after opening the adapter's port (an Arduino-based one resets)
 
     def __post_init__(self) -> None:
         if self.kind == "can" and not (self.interface and self.channel):
             raise ValueError("a can bus needs 'interface' and 'channel'")
         if self.kind == "serial" and not self.port:
             raise ValueError("a serial bus needs 'port'")
+        if self.kind == "can" and self.interface == "slcan" and self.bitrate not in slcan.BITRATE_COMMANDS:
+            raise ValueError(f"slcan has no bitrate {self.bitrate}: use one of {', '.join(map(str, slcan.BITRATE_COMMANDS))}")
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,14 @@ class HardwareConfig:
     imu: ImuConfig | None = None
     imu_model: ImuModelConfig | None = None  # simulated only: the emulated IMU's noise and bias (None: the model's defaults)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
+    cycle_hz: float = CONTROL_CYCLE_HZ  # bus cycles per second: one command to and one reply from every motor
+    # Simulated only: the emulators and MuJoCo in a process of their own on the wall clock (g1ctl robot --buses), every
+    # bus a pseudo-terminal ('sim://pty'), CAN as an slcan adapter on one.
+    robot_process: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.cycle_hz > 0:
+            raise ValueError(f"cycle_hz must be positive, got {self.cycle_hz}")
 
 
 def load_motor_models(path: Path | None = None) -> dict[str, MitRanges]:
@@ -159,6 +171,13 @@ def load_robot_config(name_or_path: str, expected_joints: tuple[str, ...] = JOIN
 
 def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...], models: dict[str, MitRanges]) -> None:
     check_imu_model(cfg.imu_model, cfg.simulated, source)
+    if cfg.robot_process:
+        check_robot_process(cfg, source)
+    elif cfg.simulated and not (CONTROL_CYCLE_HZ / cfg.cycle_hz).is_integer():
+        raise ConfigError(
+            f"{source}: cycle_hz: simulated buses cycle in lockstep with the {CONTROL_CYCLE_HZ:g} Hz physics, "
+            f"so the rate must divide it (500, 250, 125, ...), got {cfg.cycle_hz:g}"
+        )
     missing = [j for j in expected_joints if j not in cfg.joints]
     if missing:
         raise ConfigError(f"{source}: joints missing from the joint map: {', '.join(missing)}")
@@ -194,3 +213,14 @@ def validate(cfg: HardwareConfig, source: str, expected_joints: tuple[str, ...],
             raise ConfigError(f"{source}: imu.bus: '{cfg.imu.bus}' is shared with motors; give the IMU its own port")
     elif cfg.imu_model is not None:
         raise ConfigError(f"{source}: imu_model: this config has no IMU to model (add an 'imu' section with its serial bus)")
+
+
+def check_robot_process(cfg: HardwareConfig, source: str) -> None:
+    """A bus robot in its own process is simulated, and the process makes every port: a pseudo-terminal each."""
+    if not cfg.simulated:
+        raise ConfigError(f"{source}: robot_process: a robot process is a simulated one (simulated: true)")
+    for name, bus in cfg.buses.items():
+        where, given = ("channel", bus.channel) if bus.kind == "can" else ("port", bus.port)
+        if (bus.kind == "can" and bus.interface != "slcan") or given != "sim://pty":
+            wanted = "interface: slcan, channel: 'sim://pty'" if bus.kind == "can" else "port: 'sim://pty'"
+            raise ConfigError(f"{source}: buses.{name}: the robot process makes its ports ({wanted}), this one has {where} '{given}'")

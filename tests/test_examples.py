@@ -24,6 +24,7 @@ ROBOTS = (
     pytest.param("sim-can", id="sim-can-in-process"),
     pytest.param("sim-mixed", id="sim-mixed-in-process"),
     pytest.param("sim-dds", id="sim-dds-robot-process"),
+    pytest.param("sim-can-process", id="sim-can-robot-process"),
 )
 IMU_BIAS = {"accel_bias": (0.1, -0.05, 0.2), "gyro_bias": (0.01, -0.02, 0.005)}  # put into the simulated IMU, measured back
 

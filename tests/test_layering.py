@@ -27,7 +27,7 @@ MUJOCO_FOLDERS = ("sim", "controller/bench")
 TORCH_FOLDERS = ("controller/training",)
 
 # The hardware run path: what `g1ctl hw ...` and a hardware session load (a run on a real robot: the driver, the plan of
-# the run, the backend registry and the DDS backends; its recording included).
+# the run, the backend registry, the DDS backends and the backends of robots on buses; its recording included).
 HARDWARE_PATH_MODULES = (
     "controller.runtime.bench_robot",
     "controller.runtime.bringup",
@@ -37,6 +37,7 @@ HARDWARE_PATH_MODULES = (
     "controller.runtime.run_plan",
     "controller.runtime.backend_registry",
     "controller.runtime.dds_backend",
+    "controller.runtime.hardware_backend",
     "controller.cli.main",
     "controller.cli.hw",
     "controller.runtime.session",
@@ -55,7 +56,9 @@ SIM_FREE_FOLDERS = (
 
 # Host-side driver modules the firmware emulators must not use: an emulator stands for the motor's
 # own firmware, so it may share the pure protocol codecs, never the host's drivers.
-HOST_DRIVER_MODULES = ("hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.safety", "hw.bench", "hw.bus_bench")
+HOST_DRIVER_MODULES = (
+    "hw.drivers", "hw.hardware_robot", "hw.imu", "hw.feedback", "hw.transport", "hw.slcan", "hw.safety", "hw.bench", "hw.bus_bench",
+)  # fmt: skip
 
 # `controller/` keeps its code in role folders; only these modules sit at its top level.
 CONTROLLER_TOP_LEVEL = {"__init__", "assets", "reports", "onnx_session"}

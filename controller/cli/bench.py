@@ -5,6 +5,8 @@ g1ctl bench recorder [--report PATH] [--duration 60] [--rounds 2] [--hardware si
 g1ctl bench estimator [--report PATH] [--backends sim-can,sim-dds] [--cases NAMES] [--seed 1]
 g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
+g1ctl bench buses [--report PATH] [--rates 250,333.333,400,500] [--seconds 10] [--hardware sim-can-process] [--rt-priority N]
+                  [--cpu N]
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
@@ -53,6 +55,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     hw_bench.add_argument("--rt-priority", type=int, default=50, help="SCHED_FIFO priority for both loops (0: normal scheduling)")
     hw_bench.add_argument("--cpu", type=int, default=None, help="pin both loops to this CPU (default: the last one; -1: no pinning)")
 
+    buses = bench_sub.add_parser("buses", help="the bus rates this machine holds against the bus robot in its own process")
+    buses.add_argument("--report", type=Path, default=None)
+    buses.add_argument("--rates", default="250,333.333,400,500", help="comma-separated bus rates to try (Hz)")
+    buses.add_argument("--seconds", type=float, default=10.0, help="seconds at each rate")
+    buses.add_argument("--hardware", default="sim-can-process", help="a bus robot's config (robot_process: true)")
+    buses.add_argument("--rt-priority", type=int, default=0, help="SCHED_FIFO priority of the host loop (0: normal scheduling)")
+    buses.add_argument("--cpu", type=int, default=None, help="pin the host loop to this CPU (default: no pinning)")
+
     dds_bench = bench_sub.add_parser("dds", help="host cycle with the G1 over DDS at 500 Hz against a raw Cyclone DDS round trip")
     dds_bench.add_argument("--report", type=Path, default=None)
     dds_bench.add_argument("--seconds", type=float, default=30.0)
@@ -95,6 +105,17 @@ def run(args: argparse.Namespace) -> int:
         from controller.bench.hw import run_hw_bench  # noqa: PLC0415
 
         _emit(run_hw_bench(args.seconds, args.rt_priority, args.cpu), args.report)
+        return 0
+    if args.bench_command == "buses":
+        from controller.bench.bus_robot import run_bus_robot_bench  # noqa: PLC0415
+
+        try:
+            rates = [float(rate) for rate in args.rates.split(",")]
+        except ValueError:
+            rates = []
+        if not rates or min(rates) <= 0:
+            raise ConfigError(f"--rates: positive rates in Hz, comma-separated (e.g. 250,500), got '{args.rates}'")
+        _emit(run_bus_robot_bench(rates, args.seconds, args.hardware, args.rt_priority, args.cpu, args.assets_dir), args.report)
         return 0
     if args.bench_command == "dds":
         from controller.bench.dds import run_dds_bench  # noqa: PLC0415 - the g1 extra

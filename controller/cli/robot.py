@@ -1,6 +1,12 @@
 """`g1ctl robot --dds [--domain 1] [--interface lo] [--duration S] [--mode-machine 5] [--motion-mode ai]
 [--truth] [--lockstep] [--gantry] [--fault KIND@SECONDS ...] [--remote SCENARIO|keyboard|gamepad] [--joint-map CONFIG]
-[--seed N]`: a simulated G1 in its own process on the robot's DDS topics."""
+[--seed N]`: a simulated G1 in its own process on the robot's DDS topics.
+
+`g1ctl robot --buses sim-can-process|sim-mixed-process|PATH [--faults PLAN] [--truth-socket PATH] [--host-config PATH]
+[--gantry] [--duration S] [--seed N]`: the G1 in MuJoCo behind the firmware emulators of a bus config, in its own process
+on the wall clock; its serial ports and slcan CAN adapters are pseudo-terminals, printed as one JSON line
+(`{"ready": true, "buses": {...}}`) for a host to open (`g1ctl sim --hardware` with the same config starts one itself;
+`--host-config` writes a real robot's config on its ports, for `g1ctl run --hardware`)"""
 
 from __future__ import annotations
 
@@ -9,14 +15,26 @@ import dataclasses
 import json
 from collections.abc import Callable
 from contextlib import ExitStack
+from pathlib import Path
+from typing import Any
 
 from hw.emulation.g1_faults import KINDS, RobotFault
 from hw.errors import ConfigError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    robot = sub.add_parser("robot", help="a simulated G1 in its own process, on the robot's DDS topics")
+    robot = sub.add_parser("robot", help="a simulated G1 in its own process, on the robot's DDS topics or behind CAN and serial buses")
     robot.add_argument("--dds", action="store_true", help="speak the G1's low-level DDS protocol (rt/lowcmd, rt/lowstate)")
+    robot.add_argument(
+        "--buses", default=None, metavar="CONFIG",
+        help="a bus robot's hardware config (sim-can-process, sim-mixed-process): its buses as pseudo-terminals, CAN over slcan",
+    )  # fmt: skip
+    robot.add_argument("--faults", default=None, metavar="PLAN", help="with --buses: a fault plan for its buses (configs/faults/)")
+    robot.add_argument("--truth-socket", default=None, metavar="PATH", help="with --buses: send the ground truth to this UNIX socket")
+    robot.add_argument(
+        "--host-config", type=Path, default=None, metavar="PATH",
+        help="with --buses: write a real robot's config on this robot's ports (g1ctl run --hardware PATH drives it as real buses)",
+    )  # fmt: skip
     robot.add_argument("--domain", type=int, default=1, help="DDS domain (the real robot uses 0)")
     robot.add_argument("--interface", default="lo", help="network interface")
     robot.add_argument("--duration", type=float, default=None, help="seconds to run (default: until stopped)")
@@ -43,8 +61,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    if not args.dds:
-        raise ConfigError("g1ctl robot needs a protocol: --dds (the G1's low-level DDS topics)")
+    if args.dds == (args.buses is not None):
+        raise ConfigError("g1ctl robot needs one protocol: --dds (the G1's low-level DDS topics) or --buses CONFIG (CAN and serial)")
+    if args.buses is not None:
+        return _bus_robot(args)
+    if args.faults is not None or args.truth_socket is not None or args.host_config is not None:
+        raise ConfigError("--faults, --truth-socket and --host-config are for --buses; over DDS: --fault KIND@SECONDS and --truth")
     from controller.assets import ensure_assets  # noqa: PLC0415
     from hw.dds.session import DdsConfig  # noqa: PLC0415
     from hw.emulation.g1_lowlevel import LowLevelConfig  # noqa: PLC0415
@@ -84,3 +106,30 @@ def _remote(name: str | None, stack: ExitStack) -> Callable[[float], bytes] | No
         except ConfigError as exc:
             raise ConfigError(f"--remote {name}: at {step.t:g} s, {exc}") from exc
     return remote_feed(source, limits)
+
+
+def _bus_robot(args: argparse.Namespace) -> int:
+    """The bus robot: its ports on stdout as soon as they are open, its counters when it stops."""
+    import yaml  # noqa: PLC0415
+
+    from controller.assets import ensure_assets  # noqa: PLC0415
+    from sim.bus_robot import BusRobotConfig, load_bus_robot, real_robot_yaml, run_bus_robot  # noqa: PLC0415 - MuJoCo
+
+    refused = [flag for flag, given in (("--fault", args.fault), ("--remote", args.remote), ("--lockstep", args.lockstep)) if given]
+    if refused:
+        raise ConfigError(f"{', '.join(refused)}: for a robot over DDS (--dds); a bus robot's faults are a plan: --faults PLAN")
+    load_bus_robot(args.buses)  # a config that is no bus robot's: one line before MuJoCo loads
+    cfg = BusRobotConfig(
+        mjcf=ensure_assets(args.assets_dir, quiet=True).g1_mjcf, hardware=args.buses, faults=args.faults, seed=args.seed,
+        duration_s=args.duration, truth=args.truth_socket, gantry=args.gantry,
+    )  # fmt: skip
+
+    def announce(ready: dict[str, Any]) -> None:
+        if args.host_config is not None:  # written before the announcement: a host that reads it finds the file
+            args.host_config.parent.mkdir(parents=True, exist_ok=True)
+            args.host_config.write_text(yaml.safe_dump(real_robot_yaml(args.buses, ready["buses"]), sort_keys=False, width=200))
+            ready = {**ready, "host_config": str(args.host_config)}
+        print(json.dumps(ready), flush=True)
+
+    print(json.dumps(run_bus_robot(cfg, announce)))
+    return 0

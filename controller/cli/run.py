@@ -4,9 +4,10 @@ g1ctl run [--input auto|keyboard|gamepad|scripted|unitree-remote] [--scenario wa
           [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can|sim-dds|g1-dds|PATH] [--duration S] [--headless]
           [--rt-priority 50] [--cpu N] [--record runs/run.mcap]
 
-With a real G1's config (`simulated: false`, e.g. a copy of g1-dds.yaml) the run drives that robot
-(the same driver, `controller/runtime/driver.py`, on the registry's `real-dds` backend, no simulator):
-its own remote is the default input.
+With a real robot's config (`simulated: false`) the run drives that robot (the same driver,
+`controller/runtime/driver.py`, no simulator): a G1 over DDS (a copy of g1-dds.yaml, the registry's
+`real-dds`; its own remote is the default input), or a robot on CAN and serial buses (your bus
+config, `real-buses`: bus cycles at the config's `cycle_hz` on the wall clock).
 
 With a display: MuJoCo's viewer, the planned motion drawn as a ghost beside the robot, held
 to the wall clock. Without one: headless. `--input auto` takes a gamepad when one is plugged
@@ -23,6 +24,7 @@ import sys
 from pathlib import Path
 
 from controller.inputs.registry import INPUTS
+from hw.dds.config import DdsHardwareConfig
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -36,7 +38,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--tracker", default=None, help="tracker by name (default: decoupled with the planner, else velocity)")
     run.add_argument("--policy", default="fastsac", help="locomotion policy preset or YAML")
     run.add_argument(
-        "--hardware", default=None, help="simulated hardware (sim-can, sim-mixed, sim-dds), or a real G1 (g1-dds or your copy)"
+        "--hardware",
+        default=None,
+        help="simulated hardware (sim-can, sim-mixed, sim-dds), a real G1 (g1-dds or your copy) or your robot's bus config",
     )
     run.add_argument("--duration", type=float, default=None, help="seconds (default: the scenario's; interactive: until Ctrl-C)")
     run.add_argument("--headless", action="store_true", help="no viewer even where a display exists")
@@ -48,8 +52,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="estimate the base position from the IMU and the legs on the simulator too (hardware always does)",
     )
     run.add_argument("--estimator-config", default=None, help="the state estimator's YAML (default: configs/estimator.yaml)")
-    run.add_argument("--rt-priority", type=int, default=0, help="on a real G1: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
-    run.add_argument("--cpu", type=int, default=None, help="on a real G1: pin the run to this CPU")
+    run.add_argument("--rt-priority", type=int, default=0, help="on a real robot: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
+    run.add_argument("--cpu", type=int, default=None, help="on a real robot: pin the run to this CPU")
     run.add_argument("--record", type=Path, default=None, help="record every tick into this MCAP file (g1ctl log reads it)")
 
 
@@ -60,13 +64,14 @@ def run(args: argparse.Namespace) -> int:
     from controller.runtime.run_plan import resolve_run  # noqa: PLC0415
 
     choice = choose_backend(args.hardware)
-    on_robot = not choice.entry.simulated  # a real G1: no viewer, its own remote by default
+    on_robot = not choice.entry.simulated  # a real robot: no viewer
     viewer = not on_robot and not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if not on_robot and (args.video is not None or not viewer):
         from sim import use_headless_gl  # noqa: PLC0415
 
         use_headless_gl()
-    source = "unitree-remote" if on_robot and args.input == "auto" else _choose_input(args.input)
+    g1_remote = on_robot and isinstance(choice.hardware, DdsHardwareConfig)  # a real G1 has its remote; a robot on buses has none
+    source = "unitree-remote" if g1_remote and args.input == "auto" else _choose_input(args.input)
     cfg = RunConfig(
         scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
         seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,

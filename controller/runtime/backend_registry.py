@@ -1,16 +1,16 @@
 """Run backends by the robot a hardware config names: one entry per kind of robot, and its builder.
 
 A run's hardware config (or none) names a kind of robot (`robot_kind`): the simulator in this
-process, simulated buses (sim-can, sim-mixed), the simulated G1 over DDS in its own process
-(sim-dds), a real G1 over DDS (g1-dds). `BACKENDS` maps each kind to what the plan of the run
-checks before anything starts (what the backend honours: a video, perturbations, fault plans,
-real-time scheduling; its clock) and to the builder that makes it. A kind without an entry
-(real CAN/serial buses today) is refused in one line that lists the ones there are.
+process, simulated buses in this process (sim-can, sim-mixed) or in a robot process of their own
+(sim-can-process, sim-mixed-process), the simulated G1 over DDS in its own process (sim-dds), a
+real G1 over DDS (g1-dds), a real robot on CAN and serial buses (your bus config with `simulated:
+false`). `BACKENDS` maps each kind to what the plan of the run checks before anything starts (what
+the backend honours: a video, perturbations, fault plans, real-time scheduling; its clock) and to
+the builder that makes it. A kind without an entry is refused in one line that lists the ones
+there are.
 
-A new kind of robot is one entry here and its builder: real buses that run policies (`real-buses`,
-issue 22 point 2), or a bus robot in its own process (point 3, once its config says so in
-`robot_kind`). Builders are named as `module:function` and imported when a run starts, so a run
-on a real robot never imports MuJoCo.
+A new kind of robot is one entry here and its builder. Builders are named as `module:function`
+and imported when a run starts, so a run on a real robot never imports MuJoCo.
 """
 
 from __future__ import annotations
@@ -95,7 +95,19 @@ BACKENDS: dict[str, BackendEntry] = {
         build="controller.runtime.dds_backend:build_real_dds", simulated=False, physics_in_process=False, fault_plans=None,
         clock="wall", measures_base_position=False,
     ),
-    # "real-buses" (issue 22 point 2) and a bus robot in its own process (point 3) come here.
+    # The G1 behind the firmware emulators of a bus config in its own process (g1ctl robot --buses), on the wall clock, its
+    # pseudo-terminals opened as a real robot's ports (sim-can-process, sim-mixed-process).
+    "simulated-buses-process": BackendEntry(
+        name="simulated-buses-process",
+        build="controller.runtime.bus_process:build_bus_robot_process", simulated=True, physics_in_process=False, fault_plans="buses",
+        clock="wall", measures_base_position=False,
+    ),
+    # A real robot on python-can interfaces and serial ports (a bus config with simulated: false), cycles on the wall clock.
+    "real-buses": BackendEntry(
+        name="real-buses",
+        build="controller.runtime.hardware_backend:build_real_buses", simulated=False, physics_in_process=False, fault_plans=None,
+        clock="wall", measures_base_position=False,
+    ),
 }  # fmt: skip
 
 
@@ -103,6 +115,8 @@ def robot_kind(hardware: RobotConfig | None) -> str:
     """The kind of robot a hardware config names (None: no hardware config, the simulator directly)."""
     if hardware is None:
         return "simulator"
+    if isinstance(hardware, HardwareConfig) and hardware.robot_process:
+        return "simulated-buses-process"
     transport = "dds" if isinstance(hardware, DdsHardwareConfig) else "buses"
     return f"{'simulated' if hardware.simulated else 'real'}-{transport}"
 

@@ -66,15 +66,15 @@ def open_robot(hardware: str, assets_dir: str | None = None) -> Iterator[BenchRo
         yield OPENERS[kind](cfg, hardware, assets_dir, stack)
 
 
-def paced(cycle: Callable[[], None]) -> Pump:
-    """`cycle` held to 500 Hz on the wall clock; a late cycle re-anchors the schedule rather than bursting."""
+def paced(cycle: Callable[[], None], rate_hz: float) -> Pump:
+    """`cycle` held to `rate_hz` on the wall clock; a late cycle re-anchors the schedule rather than bursting."""
     clock = WallClock()
     deadline = clock.now()
 
     def pump() -> None:
         nonlocal deadline
         cycle()
-        deadline = max(deadline + 1.0 / CONTROL_CYCLE_HZ, clock.now())
+        deadline = max(deadline + 1.0 / rate_hz, clock.now())
         clock.sleep_until(deadline)
 
     return pump
@@ -93,9 +93,20 @@ def _dds_config(cfg: RobotConfig) -> DdsHardwareConfig:
 
 
 def open_real_buses(cfg: RobotConfig, name: str, assets_dir: str | None, stack: ExitStack) -> BenchRobot:
-    host = stack.enter_context(HardwareRobot(_bus_config(cfg)))
+    bus_cfg = _bus_config(cfg)
+    host = stack.enter_context(HardwareRobot(bus_cfg))
     host.configure(require_all=False)
-    return BusBenchRobot(host, paced(host.cycle), name)
+    return BusBenchRobot(host, paced(host.cycle, bus_cfg.cycle_hz), name)
+
+
+def open_bus_robot_process(cfg: RobotConfig, name: str, assets_dir: str | None, stack: ExitStack) -> BenchRobot:
+    """`g1ctl robot --buses --gantry` in its own process (a sweep cannot tip it over), its ports opened as a real robot's;
+    the process is stopped after the robot is closed (damped)."""
+    from controller.runtime.bus_process import BusRobotProcess, host_config  # noqa: PLC0415
+
+    process = BusRobotProcess(name, assets_dir, extra_args=("--gantry",))
+    stack.callback(process.stop)
+    return open_real_buses(host_config(_bus_config(cfg), process.ports), name, assets_dir, stack)
 
 
 def open_simulated_buses(cfg: RobotConfig, name: str, assets_dir: str | None, stack: ExitStack) -> BenchRobot:
@@ -178,14 +189,14 @@ def _dds_robot(cfg: DdsHardwareConfig, name: str) -> tuple[DdsRobot, BenchRobot]
     from hw.dds.robot import DdsRobot  # noqa: PLC0415
 
     g1 = DdsRobot(dataclasses.replace(cfg, release_motion_service=False))
-    return g1, DdsBenchRobot(g1, paced(g1.cycle), name, cfg.release_motion_service)
+    return g1, DdsBenchRobot(g1, paced(g1.cycle, CONTROL_CYCLE_HZ), name, cfg.release_motion_service)
 
 
-# How each kind of robot (`robot_kind`) is opened. The bus robot in its own process (issue 22 point 3) comes here,
-# with its kind, once a hardware config can name it.
+# How each kind of robot (`robot_kind`) is opened.
 OPENERS: dict[str, Opener] = {
     "real-buses": open_real_buses,
     "simulated-buses": open_simulated_buses,
+    "simulated-buses-process": open_bus_robot_process,
     "real-dds": open_real_dds,
     "simulated-dds": open_simulated_dds,
 }

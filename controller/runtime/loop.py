@@ -133,3 +133,49 @@ class RateLoop:
                 deadline = now
             else:
                 self.clock.sleep_until(deadline)
+
+
+class CyclePacer:
+    """Bus cycles at `rate_hz` on `clock`'s deadlines, for a robot whose buses run on the wall clock.
+
+    Each cycle starts at its deadline on a fixed grid. A cycle that could only start a whole period or more after its
+    deadline (the work before it ran long: a control tick, a stall of the machine) is not made up for with a burst: the
+    slots it passed are counted in `missed` and it runs at once, in the grid's latest slot. `periods` holds the times
+    from one cycle's start to the next (what the motors see), `cycles` how many ran.
+    """
+
+    def __init__(self, clock: Clock, rate_hz: float) -> None:
+        if rate_hz <= 0:
+            raise ValueError(f"rate must be positive, got {rate_hz}")
+        self.clock = clock
+        self.period = 1.0 / rate_hz
+        self.missed = 0
+        self.cycles = 0
+        self.periods: list[float] = []
+        self._next: float | None = None  # the next cycle's deadline
+        self._last_start: float | None = None
+
+    def run_next(self, cycle: Callable[[], None]) -> None:
+        """Wait for the next deadline and run `cycle` then (at once, counting the slots passed, when it is long gone)."""
+        if self._next is None:
+            self._next = self.clock.now()
+        self.clock.sleep_until(self._next)
+        start = self.clock.now()
+        behind = int((start - self._next) / self.period)  # whole periods past the deadline
+        if behind > 0:
+            self.missed += behind
+            self._next += behind * self.period
+        if self._last_start is not None:
+            self.periods.append(start - self._last_start)
+        self._last_start = start
+        cycle()
+        self.cycles += 1
+        self._next += self.period
+
+    def run_until(self, t: float, cycle: Callable[[], None]) -> None:
+        """Every cycle due by `t`, each at its deadline; then wait until `t`."""
+        if self._next is None:
+            self._next = self.clock.now()
+        while self._next <= t + 1e-9:
+            self.run_next(cycle)
+        self.clock.sleep_until(t)

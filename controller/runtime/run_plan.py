@@ -113,7 +113,7 @@ def check_options(cfg: RunConfig, entry: BackendEntry) -> None:
         if unsupported or cfg.faults:
             raise ConfigError(f"{', '.join(unsupported or ['--faults'])}: not on a real robot (they need the simulator)")
     elif cfg.rt_priority or cfg.cpu is not None:
-        raise ConfigError("--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy)")
+        raise ConfigError("--rt-priority and --cpu are for a real robot's run (--hardware g1-dds or your copy, or your robot's bus config)")
     if cfg.perturbations is not None and not entry.physics_in_process:
         raise ConfigError("--perturb needs the physics in this process: the simulator, or simulated buses (sim-can, sim-mixed)")
     if cfg.faults is not None and entry.fault_plans is None:

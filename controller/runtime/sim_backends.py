@@ -3,7 +3,8 @@
 `DirectSimBackend`: the controller writes joint commands into MuJoCo's PD servos
 (`PerturbedSimBackend`: under perturbations). `SimulatedHardwareBackend`: the controller drives
 a `HardwareRobot` over the codecs and buses of a hardware config, with firmware emulators and
-MuJoCo behind them; one bus cycle per physics step (500 Hz), in lockstep with simulated time.
+MuJoCo behind them; one bus cycle per physics step at 500 Hz (at the config's `cycle_hz`: every so many
+steps), in lockstep with simulated time.
 `build_simulator` and `build_simulated_buses` make them from the plan of a run (the registry's
 `simulator` and `simulated-buses`); `simulated_world` is the G1 in MuJoCo they stand on.
 """
@@ -22,6 +23,7 @@ from controller.runtime.hardware_backend import HardwareBackend
 from hw.emulation.faults import FaultFile, load_faults
 from hw.emulation.faulty_commands import FaultyCommands
 from hw.emulation.rig import SimulatedHardware
+from hw.g1 import CONTROL_CYCLE_HZ
 from hw.hardware_robot import HardwareRobot, Lifecycle
 from hw.jointmap import HardwareConfig
 from hw.robot import RobotInterface
@@ -122,7 +124,8 @@ class SimulatedHardwareBackend(HardwareBackend):
         except Exception:
             self.twin.close()
             raise
-        super().__init__(host, config_name, now=lambda: truth.time, after_cycle=self.twin.step)
+        super().__init__(host, config_name)
+        self.steps_per_cycle = round(CONTROL_CYCLE_HZ / cfg.cycle_hz)  # physics steps (the motors' control steps) per bus cycle
         rng = np.random.default_rng(seed)
         self.pushes = PushForces(truth, push_schedule(perturbations.pushes if perturbations else None, duration, rng))
         self._wrappers: list[RobotInterface] = []  # outermost last: the controller writes into it
@@ -133,9 +136,25 @@ class SimulatedHardwareBackend(HardwareBackend):
         if self._wrappers:
             self.robot = self._wrappers[-1]
 
+    def now(self) -> float:
+        return self.sim.time
+
+    def advance_to(self, t: float) -> None:
+        """Bus cycles back to back until simulated time reaches `t`, the physics stepped after each."""
+        while self.sim.time < t - 1e-9:
+            self.cycle()
+
+    def _configured(self) -> None:
+        self.twin.step()
+
+    def _next_cycle(self) -> None:
+        self.cycle()
+
     def cycle(self) -> None:
         self.pushes.apply()
         super().cycle()
+        for _ in range(self.steps_per_cycle):
+            self.twin.step()
 
     def report(self) -> dict[str, Any]:
         return super().report() | {"wire": self.twin.audit.report()}

@@ -1,11 +1,13 @@
 """Firmware emulators: MIT-mode motors on a CAN bus, GO-M8010-style motors on RS-485, a serial IMU.
 
-Like real motor firmware, an emulator works in two places. Its receive thread answers
+Like real motor firmware, an emulator works in two places. Its receive side answers
 each frame at once with the status sampled at the last control tick and files the
-command away; `tick()` (called once per physics step) is the control loop: it decodes
-the newest command exactly as the firmware would (quantization included), runs the
-watchdog and the thermal model, pushes the PD law into the plant and samples the status
-the next replies carry.
+command away: on a thread of its own (simulated hardware in the host's process), or
+from the bus robot process's loop (`g1ctl robot --buses`, `sim/bus_robot.py`), CAN as
+an slcan adapter on a pseudo-terminal (`SlcanMitEmulator`). `tick()` (called once per
+physics step) is the control loop: it decodes the newest command exactly as the firmware
+would (quantization included), runs the watchdog and the thermal model, pushes the PD law
+into the plant and samples the status the next replies carry.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import select
 import termios
 import threading
 import time
+from typing import Literal
 
 import can
 from can.interfaces.virtual import VirtualBus
@@ -27,8 +30,9 @@ from hw.emulation.imu_model import ImuModel
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
 from hw.protocols import imu as imu_frame
-from hw.protocols import mit
+from hw.protocols import mit, slcan
 from hw.protocols import unitree_rs485 as rs485
+from hw.protocols.crc import FrameError
 
 CAN_ERR_PROT = 0x08  # SocketCAN error classes (linux/can/error.h)
 CAN_ERR_BUSOFF = 0x40
@@ -42,8 +46,10 @@ log = logging.getLogger(__name__)
 
 
 class _Emulator:
-    """A background thread answering frames until `close()`. If it dies, `error` holds why
-    (and the log has the traceback): `SimulatedHardware.step()` raises it into the run."""
+    """The firmware of the motors on one bus, answering frames until `close()`: on a background thread of its own
+    (`start`), or from the bus robot process's loop (`start_served`, then `serve()` whenever its port is readable). A
+    thread that dies keeps why in `error` (and the log has the traceback): `SimulatedHardware.step()` raises it into
+    the run. A reply a fault delays waits on the thread; served from a loop it is held until due (`flush_due`)."""
 
     def __init__(self, name: str, plant: Plant, faults: FaultPlan | None) -> None:
         self.name = name
@@ -53,11 +59,45 @@ class _Emulator:
         self.frames_out = 0
         self.error: Exception | None = None
         self._running = True
+        self._served = False  # answered from a loop (the robot process), not a thread
+        self._held: list[tuple[float, bytes]] = []  # served: delayed replies (wall-clock due time, bytes) in order
         self._thread = threading.Thread(target=self._run, name=f"emulator-{name}", daemon=True)
 
     def start(self) -> None:
         self.sample()  # a first status before answering anything
         self._thread.start()
+
+    def start_served(self) -> None:
+        """Answer from a loop that calls `serve()` when the port is readable and `flush_due()` now and then."""
+        self.sample()
+        self._served = True
+
+    def serve(self) -> None:
+        """Read what has arrived at the port and answer it (served from a loop)."""
+        raise NotImplementedError
+
+    def _write(self, data: bytes) -> None:
+        raise NotImplementedError
+
+    def _reply(self, data: bytes, delay: float) -> None:
+        """Send `data` now, or after a fault's `delay` (on the thread: waiting; served: held until due)."""
+        if not delay:
+            self._write(data)
+        elif self._served:
+            self._held.append((time.monotonic() + delay, data))
+        else:
+            time.sleep(delay)
+            self._write(data)
+
+    def flush_due(self) -> None:
+        """Served: send the held replies whose delay has passed."""
+        now = time.monotonic()
+        while self._held and self._held[0][0] <= now:
+            self._write(self._held.pop(0)[1])
+
+    def next_due(self) -> float | None:
+        """Served: when the next held reply is due (None: none is held)."""
+        return self._held[0][0] if self._held else None
 
     def _run(self) -> None:
         try:
@@ -91,10 +131,14 @@ class _Emulator:
             self._thread.join(timeout=1.0)
 
 
-class MitBusEmulator(_Emulator):
-    """MIT-mode motors on one virtual CAN bus; each answers only frames to its own id.
+MitAnswer = Literal["reply", "bus-off", "corrupted"]
 
-    `wait_answered()` returns once every frame on the bus has been answered, or its reply dropped: the host of a
+
+class MitBusEmulator(_Emulator):
+    """MIT-mode motors on one CAN bus; each answers only frames to its own id. On a python-can `virtual` channel
+    (`bus`, answered on a thread) or, in the bus robot process, slcan lines on a pseudo-terminal (`SlcanMitEmulator`).
+
+    `wait_answered()` returns once every frame on the virtual bus has been answered, or its reply dropped: the host of a
     simulated run then takes the replies without waiting on the wall clock, which a loaded machine would stretch
     past the cycle's timeout. Replies delayed by a fault are not waited for: on the simulated clock they come late.
     """
@@ -102,21 +146,29 @@ class MitBusEmulator(_Emulator):
     def __init__(
         self,
         name: str,
-        bus: VirtualBus,
+        bus: VirtualBus | None,
         motors: dict[int, tuple[EmulatedMotor, mit.MitRanges, mit.ReplyVariant]],
         plant: Plant,
         faults: FaultPlan | None = None,
     ) -> None:
         super().__init__(name, plant, faults)
-        self.bus = bus
+        self._bus = bus
         self.motors = motors
         self._pending: dict[int, bytes] = {}  # newest command frame per motor, decoded at the next tick
-        self._status: dict[int, can.Message] = {}  # reply per motor, sampled at the last tick
+        # Per motor, the status sampled at the last tick: position, velocity, torque, temperature, error code, Damiao state.
+        self._status: dict[int, tuple[float, float, float, float, int, int]] = {}
         self._bus_off_sent = False
 
+    @property
+    def bus(self) -> VirtualBus:
+        if self._bus is None:
+            raise TypeError(f"the emulator of bus '{self.name}' has no virtual CAN channel: it is served over slcan")
+        return self._bus
+
     def wait_answered(self, timeout: float) -> None:
-        """Until every frame sent to the motors was answered or dropped (at most `timeout` s: a hung emulator)."""
-        if self.faults.delay_reply_s:
+        """Until every frame sent to the motors was answered or dropped (at most `timeout` s: a hung emulator).
+        Served over slcan (another process's host) there is nothing to wait on here."""
+        if self.faults.delay_reply_s or self._bus is None:
             return
         inbox = self.bus.queue
         with inbox.all_tasks_done:  # what `Queue.join()` waits on, with a timeout
@@ -133,32 +185,44 @@ class MitBusEmulator(_Emulator):
                 self.bus.queue.task_done()  # answered, dropped or ignored: what `wait_answered` waits for
 
     def _answer(self, msg: can.Message) -> None:
-        bus, faults = self.bus, self.faults
-        if msg.is_error_frame or msg.arbitration_id not in self.motors:
+        if msg.is_error_frame:
             return
+        answer = self.respond(msg.arbitration_id, bytes(msg.data))
+        if answer is None:
+            return
+        if self.faults.delay_reply_s and answer != "bus-off":
+            time.sleep(self.faults.delay_reply_s)
+        if answer == "reply":
+            self.bus.send(can.Message(arbitration_id=msg.arbitration_id, data=self.status_frame(msg.arbitration_id), is_extended_id=False))
+        else:  # receivers see an error frame: bus-off, or a reply whose CRC failed
+            error = CAN_ERR_BUSOFF if answer == "bus-off" else CAN_ERR_PROT
+            self.bus.send(can.Message(is_error_frame=True, arbitration_id=error, data=bytes(8), is_extended_id=True))
+
+    def respond(self, motor_id: int, data: bytes) -> MitAnswer | None:
+        """What the firmware makes of one frame to `motor_id`, whatever carried it: the command filed (or a special frame
+        acted on), then its answer: the status reply, an error (bus-off, once; a reply corrupted on the wire, which fails
+        every receiver's CRC) or none (another motor's id, a malformed frame, a silent bus, a dropped reply)."""
+        faults = self.faults
+        if motor_id not in self.motors:
+            return None
         self.frames_in += 1
-        motor_id, data = msg.arbitration_id, bytes(msg.data)
         if faults.bus_off:
             if not self._bus_off_sent:
-                bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_BUSOFF, data=bytes(8), is_extended_id=True))
                 self._bus_off_sent = True
-            return
+                return "bus-off"
+            return None
         if len(data) != 8:
-            return  # the firmware ignores malformed frames
+            return None  # the firmware ignores malformed frames
         if data[:7] == b"\xff" * 7:
             self._special(motor_id, data)
         else:
             self._pending[motor_id] = data
         if faults.drop_reply_prob and faults.drop():
-            return
-        if faults.delay_reply_s:
-            time.sleep(faults.delay_reply_s)
+            return None
         if faults.corrupt_prob and faults.corrupt(b"x") != b"x":
-            # A corrupted CAN frame fails the controllers' CRC: receivers see an error frame, not the data.
-            bus.send(can.Message(is_error_frame=True, arbitration_id=CAN_ERR_PROT, data=bytes(8), is_extended_id=True))
-            return
-        bus.send(self._status[motor_id])
+            return "corrupted"
         self.frames_out += 1
+        return "reply"
 
     def _special(self, motor_id: int, data: bytes) -> None:
         motor = self.motors[motor_id][0]
@@ -186,14 +250,19 @@ class MitBusEmulator(_Emulator):
         return list(self.motors)
 
     def _sample(self, motor_id: int) -> None:
-        motor, ranges, variant = self.motors[motor_id]
+        motor = self.motors[motor_id][0]
         position, velocity, torque = motor.reading(self.plant)
+        state = motor.error_code or (1 if motor.enabled else 0)  # a Damiao reply's state nibble
+        self._status[motor_id] = (position, velocity, torque, motor.temperature, motor.error_code, state)
+
+    def status_frame(self, motor_id: int) -> bytes:
+        """The reply carrying the status sampled at the last tick, encoded when asked for: the motors are sampled every
+        physics step, and a bus slower than the physics asks for fewer replies than that."""
+        _, ranges, variant = self.motors[motor_id]
+        position, velocity, torque, temperature, error_code, state = self._status[motor_id]
         if variant == "damiao":
-            state = motor.error_code or (1 if motor.enabled else 0)
-            data = mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, motor.temperature, state)
-        else:
-            data = mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, motor.temperature, error_code=motor.error_code)
-        self._status[motor_id] = can.Message(arbitration_id=motor_id, data=data, is_extended_id=False)
+            return mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, temperature, temperature, state)
+        return mit.encode_reply(ranges, variant, motor_id, position, velocity, torque, temperature, error_code=error_code)
 
     def _inject(self, motor_id: int, motor: EmulatedMotor, over_temp_code: int) -> None:
         if motor_id in self.faults.error_codes:
@@ -204,7 +273,73 @@ class MitBusEmulator(_Emulator):
 
     def close(self) -> None:
         super().close()
-        self.bus.shutdown()
+        if self._bus is not None:
+            self._bus.shutdown()
+
+
+class SlcanMitEmulator(MitBusEmulator):
+    """The MIT motors of one CAN bus behind a USB-CAN adapter that speaks slcan: the bus robot process holds the
+    adapter's end of a pseudo-terminal (`fd`) and serves it from its loop. A batch of frames that arrived together
+    is answered in one write, as an adapter forwards what the bus carried since its last USB transfer.
+
+    slcan carries no error frames: bus-off is the adapter's status line with the bus-error flag, sent once; a reply
+    corrupted on the wire never reaches the adapter's host (its controller drops a frame that fails the CRC).
+    """
+
+    def __init__(
+        self, name: str, fd: int, motors: dict[int, tuple[EmulatedMotor, mit.MitRanges, mit.ReplyVariant]], plant: Plant,
+        faults: FaultPlan | None = None,
+    ) -> None:  # fmt: skip
+        super().__init__(name, None, motors, plant, faults)
+        self.fd = fd
+        self.bad_lines = 0
+        self._rest = b""
+        os.set_blocking(fd, False)
+
+    def serve(self) -> None:
+        try:
+            data = os.read(self.fd, 65536)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            return  # EIO: the host has not opened its end, or closed it; it may open it again
+        lines, self._rest = slcan.split_lines(self._rest + data)
+        out: list[bytes] = []
+        delay = self.faults.delay_reply_s
+        for line in lines:
+            head = line[:1]
+            if head in (b"t", b"T"):
+                try:
+                    frame = slcan.decode_frame(line)
+                except FrameError:
+                    self.bad_lines += 1
+                    out.append(slcan.BELL)
+                    continue
+                answer = self.respond(frame.arbitration_id, frame.data)
+                if answer == "reply":
+                    reply = slcan.encode_frame(frame.arbitration_id, self.status_frame(frame.arbitration_id))
+                    if delay:
+                        self._reply(reply, delay)
+                    else:
+                        out.append(reply)
+                elif answer == "bus-off":
+                    out.append(slcan.encode_status(slcan.STATUS_BUS_ERROR))
+            elif head in (b"C", b"O", b"L", b"S"):
+                out.append(slcan.CR)  # the adapter's "done": close, open, listen, bitrate
+            elif line:
+                self.bad_lines += 1
+                out.append(slcan.BELL)
+        if out:
+            self._write(b"".join(out))
+
+    def _write(self, data: bytes) -> None:
+        try:
+            os.write(self.fd, data)
+        except (BlockingIOError, OSError):
+            return  # nobody reads: the adapter's buffer overflows and the frames are lost, as on the wire
+
+    def close(self) -> None:
+        self._running = False
 
 
 class Rs485PortEmulator(_Emulator):
@@ -218,7 +353,7 @@ class Rs485PortEmulator(_Emulator):
         self._splitter = rs485.FrameSplitter(rs485.COMMAND_HEADER, rs485.COMMAND_SIZE)
         self._pending: dict[int, rs485.CommandFrame] = {}
         self._mode: dict[int, int] = dict.fromkeys(motors, rs485.MODE_BRAKE)
-        self._status: dict[int, bytes] = {}
+        self._status: dict[int, tuple[int, float, float, float, int, int]] = {}  # sampled at the last tick: encode_reply's values
 
     def _serve(self) -> None:
         while self._running:
@@ -231,6 +366,23 @@ class Rs485PortEmulator(_Emulator):
                 return  # the host side closed
             for frame in self._splitter.feed(data):
                 self._answer(frame)
+
+    def serve(self) -> None:
+        try:
+            data = os.read(self.fd, 4096)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            return  # EIO: the host has not opened its end, or closed it; it may open it again
+        for frame in self._splitter.feed(data):
+            self._answer(frame)
+
+    def _write(self, data: bytes) -> None:
+        try:
+            os.write(self.fd, data)
+            self.frames_out += 1
+        except OSError:
+            return
 
     def _answer(self, frame: bytes) -> None:
         try:
@@ -248,13 +400,7 @@ class Rs485PortEmulator(_Emulator):
                 self._sample(cmd.motor_id)
         if self.faults.drop_reply_prob and self.faults.drop():
             return
-        if self.faults.delay_reply_s:
-            time.sleep(self.faults.delay_reply_s)
-        try:
-            os.write(self.fd, self.faults.corrupt(self._status[cmd.motor_id]))
-            self.frames_out += 1
-        except OSError:
-            return
+        self._reply(self.faults.corrupt(self.status_frame(cmd.motor_id)), self.faults.delay_reply_s)
 
     def tick(self) -> None:
         with self.plant.lock:
@@ -278,9 +424,11 @@ class Rs485PortEmulator(_Emulator):
     def _sample(self, motor_id: int) -> None:
         motor = self.motors[motor_id]
         position, velocity, torque = motor.reading(self.plant)
-        self._status[motor_id] = rs485.encode_reply(
-            motor_id, self._mode[motor_id], torque, velocity, position, round(motor.temperature), motor.error_code
-        )
+        self._status[motor_id] = (self._mode[motor_id], torque, velocity, position, round(motor.temperature), motor.error_code)
+
+    def status_frame(self, motor_id: int) -> bytes:
+        """The reply carrying the status sampled at the last tick, encoded when asked for (see `MitBusEmulator`)."""
+        return rs485.encode_reply(motor_id, *self._status[motor_id])
 
 
 class ImuEmulator:

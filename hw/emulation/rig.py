@@ -3,6 +3,11 @@
 Virtual CAN channels and pseudo-terminals get fresh names for each rig, so parallel runs
 never hear each other. The host side opens the rewritten config (`host_config`) exactly
 as it would open real hardware; only the channel names and port paths differ.
+
+In the host's process (`served=False`) CAN buses are python-can `virtual` channels and each
+emulator answers on a thread of its own. In the bus robot process (`served=True`, `g1ctl robot
+--buses`) every bus is a pseudo-terminal, CAN as an slcan adapter, and the process's loop
+answers whatever port is readable (`ports`, `serve`): a host in another process opens them.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import uuid
 from can.interfaces.virtual import VirtualBus
 
 from hw.emulation.faults import FaultPlan
-from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator
+from hw.emulation.firmware import ImuEmulator, MitBusEmulator, Rs485PortEmulator, SlcanMitEmulator
 from hw.emulation.imu_model import ImuModel, ImuModelConfig
 from hw.emulation.motor import EmulatedMotor
 from hw.emulation.plant import Plant
@@ -30,9 +35,12 @@ ANSWER_TIMEOUT_S = 1.0  # bounds the wait for the CAN emulators' answers: only a
 
 class SimulatedHardware:
     """Starts an emulator behind every bus of `cfg`; close() stops them. `audit` holds what the motors decoded.
-    The IMU measures as `cfg.imu_model` states (its defaults when the config has none), its noise seeded by `seed` (the run's)."""
+    The IMU measures as `cfg.imu_model` states (its defaults when the config has none), its noise seeded by `seed` (the run's).
+    `served`: the bus robot process's rig (every bus a pseudo-terminal, answered from its loop)."""
 
-    def __init__(self, cfg: HardwareConfig, plant: Plant, faults: dict[str, FaultPlan] | None = None, seed: int = 0) -> None:
+    def __init__(
+        self, cfg: HardwareConfig, plant: Plant, faults: dict[str, FaultPlan] | None = None, seed: int = 0, served: bool = False
+    ) -> None:
         self.plant = plant
         self.faults = faults or {}
         names = tuple(cfg.joints)
@@ -41,6 +49,8 @@ class SimulatedHardware:
         models = load_motor_models()
         self.emulators: list[MitBusEmulator | Rs485PortEmulator] = []
         self.imu: ImuEmulator | None = None
+        self.ports: dict[int, MitBusEmulator | Rs485PortEmulator] = {}  # served: the port (pseudo-terminal) each emulator answers
+        self._served = served
         self._fds: list[int] = []
         host_buses: dict[str, BusConfig] = {}
         try:
@@ -48,35 +58,66 @@ class SimulatedHardware:
                 plan = self.faults.setdefault(name, FaultPlan())
                 joints = {j: jc for j, jc in cfg.joints.items() if jc.bus == name}
                 if bus.kind == "can":
-                    if bus.interface != "virtual":
-                        raise ConfigError(f"simulated hardware needs 'interface: virtual' on CAN bus '{name}', it has '{bus.interface}'")
-                    host_buses[name] = dataclasses.replace(bus, channel=f"{bus.channel}-{token}")
-                    emu_bus = VirtualBus(channel=host_buses[name].channel, receive_own_messages=False)
+                    wanted = "slcan" if served else "virtual"
+                    if bus.interface != wanted:
+                        where = "the bus robot process" if served else "simulated hardware"
+                        raise ConfigError(f"{where} needs 'interface: {wanted}' on CAN bus '{name}', it has '{bus.interface}'")
                     motors: dict[int, tuple[EmulatedMotor, MitRanges, ReplyVariant]] = {}
                     for jname, jc in joints.items():
                         ranges = models[jc.model]
                         motors[jc.id] = (EmulatedMotor(jname, jc, ranges.t_max, audit=self.audit), ranges, jc.reply)
+                    if served:
+                        master, path = self._pseudo_terminal()
+                        host_buses[name] = dataclasses.replace(bus, channel=path)
+                        self.emulators.append(SlcanMitEmulator(name, master, motors, plant, plan))
+                        self.ports[master] = self.emulators[-1]
+                        continue
+                    host_buses[name] = dataclasses.replace(bus, channel=f"{bus.channel}-{token}")
+                    emu_bus = VirtualBus(channel=host_buses[name].channel, receive_own_messages=False)
                     self.emulators.append(MitBusEmulator(name, emu_bus, motors, plant, plan))
                 else:
-                    master, slave = os.openpty()
-                    tty.setraw(slave)
-                    self._fds += [master, slave]
-                    host_buses[name] = dataclasses.replace(bus, port=os.ttyname(slave))
+                    master, path = self._pseudo_terminal()
+                    slave = self._fds[-1]
+                    host_buses[name] = dataclasses.replace(bus, port=path)
                     if cfg.imu is not None and cfg.imu.bus == name:
                         model = ImuModel(cfg.imu_model or ImuModelConfig(), seed)
-                        self.imu = ImuEmulator(master, plant, plan, reader_fd=slave, model=model)
+                        # In this process the host reads on a thread's time: a frame must be readable before a cycle looks.
+                        self.imu = ImuEmulator(master, plant, plan, reader_fd=None if served else slave, model=model)
                     else:
                         rs_motors = {
                             jc.id: EmulatedMotor(jname, jc, torque_max=jc.torque_limit / jc.gear_ratio, audit=self.audit)
                             for jname, jc in joints.items()
                         }
                         self.emulators.append(Rs485PortEmulator(name, master, rs_motors, plant, plan))
+                        if served:
+                            self.ports[master] = self.emulators[-1]
         except Exception:
             self.close()
             raise
         self.host_config = dataclasses.replace(cfg, buses=host_buses)
         for emulator in self.emulators:
-            emulator.start()
+            if served:
+                emulator.start_served()
+            else:
+                emulator.start()
+
+    def _pseudo_terminal(self) -> tuple[int, str]:
+        """A pseudo-terminal in raw mode: the emulator's end, and the path the host opens. The emulator keeps the host's
+        end open too, so that a host closing and opening it again never leaves the emulator's end hung up."""
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        self._fds += [master, slave]
+        if self._served:
+            os.set_blocking(master, False)
+        return master, os.ttyname(slave)
+
+    def serve(self, ready: list[int]) -> None:
+        """Served: answer what arrived on the ready ports, and send the delayed replies that are due."""
+        for fd in ready:
+            self.ports[fd].serve()
+        for emulator in self.emulators:
+            if emulator.next_due() is not None:
+                emulator.flush_due()
 
     def await_replies(self) -> None:
         """Returns once every frame sent to the CAN motors has been answered or its reply dropped (`HardwareRobot`'s hook)."""
@@ -84,8 +125,9 @@ class SimulatedHardware:
             if isinstance(emulator, MitBusEmulator):
                 emulator.wait_answered(ANSWER_TIMEOUT_S)
 
-    def step(self) -> None:
+    def step(self, physics: bool = True) -> None:
         """One physics step: the motors' control step, physics, then fresh status and IMU frames (the IMU's readable by the host).
+        `physics=False`: the same but for the physics (a robot that has not been given a command to hold yet stands still).
         Raises `EmulatorError` once an emulator's thread died: its motors would only go silent."""
         for emulator in self.emulators:
             if emulator.error is not None:
@@ -100,7 +142,7 @@ class SimulatedHardware:
         for emulator in self.emulators:
             emulator.tick()
         step = getattr(self.plant, "step", None)
-        if step is not None:
+        if step is not None and physics:
             step()
         for emulator in self.emulators:
             emulator.sample()

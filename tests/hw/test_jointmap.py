@@ -78,3 +78,24 @@ def test_a_joint_of_another_robot_must_state_its_torque_limit(tmp_path: Path) ->
     )
     with pytest.raises(ConfigError, match=r"missing required key 'joints.elbow.torque_limit'"):
         load_hardware_config(str(path), expected_joints=("elbow",))
+
+
+def test_the_bus_rate_comes_from_the_config_and_simulated_buses_keep_to_the_physics(tmp_path: Path) -> None:
+    assert load_hardware_config("sim-can").cycle_hz == g1.CONTROL_CYCLE_HZ  # left out: the G1's 500 Hz
+    path = tmp_path / "rate.yaml"
+    path.write_text(SIM_CAN.read_text() + "cycle_hz: 250\n")
+    assert load_hardware_config(str(path)).cycle_hz == 250.0
+    path.write_text(SIM_CAN.read_text() + "cycle_hz: 300\n")
+    with pytest.raises(ConfigError, match=r"rate\.yaml: cycle_hz: simulated buses cycle in lockstep with the 500 Hz physics, .*got 300"):
+        load_hardware_config(str(path))
+    real = SIM_CAN.read_text().replace("simulated: true", "simulated: false")
+    real = "\n".join(line for line in real.splitlines() if not line.startswith("imu_model:"))
+    path.write_text(real + "\ncycle_hz: 300\n")  # a real robot's buses run at whatever rate they are given
+    assert load_hardware_config(str(path)).cycle_hz == 300.0
+    path.write_text(real + "\ncycle_hz: 0\n")
+    with pytest.raises(ConfigError, match="cycle_hz must be positive, got 0"):
+        load_hardware_config(str(path))
+    path.write_text(real.replace("interface: virtual, channel: g1-can0", "interface: slcan, channel: /dev/ttyACM0").replace(
+        "bitrate: 1000000}\n  can1", "bitrate: 300000}\n  can1", 1))  # fmt: skip
+    with pytest.raises(ConfigError, match="slcan has no bitrate 300000: use one of 10000, "):
+        load_hardware_config(str(path))

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from controller.bench.bus_robot import run_bus_robot_bench
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
 from controller.bench.recorder import run_recorder_bench
@@ -37,6 +38,16 @@ def test_hw_bench_reports_cycle_and_raw_round_trip() -> None:
     assert set(report["cycle_ms"]) == set(report["raw_round_trip_ms"]) == {"p50", "p99"}
     assert report["counters"]["frames_received"] >= 29 * report["cycles"]
     assert report["counters"]["crc_errors"] == 0
+
+
+@pytest.mark.slow
+def test_buses_bench_reports_each_rate_and_the_highest_held() -> None:
+    report = run_bus_robot_bench([250.0], seconds=1.0)
+    (rate,) = report["rates"]
+    assert rate["rate_hz"] == 250.0 and rate["cycle_period_ms"]["target"] == 4.0 and set(rate["cycle_ms"]) == {"p50", "p99"}
+    assert 200 < rate["cycles"] + rate["missed_cycles"] <= 260 and rate["reply_timeout_ms"] == 3.0
+    assert report["highest_rate_held"] == (250.0 if rate["held"] else None) and len(report["load_average"]) == 3
+    assert rate["robot_step_ms"]["p50"] > 0  # the robot process stepped its physics: the host held a pose, stiffly
 
 
 @pytest.mark.slow

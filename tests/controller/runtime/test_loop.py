@@ -1,10 +1,10 @@
-"""The fixed-rate loop under a fake clock: pacing on deadlines, overruns counted."""
+"""The fixed-rate loop and the bus cycle pacer under a fake clock: pacing on deadlines, overruns and missed cycles counted."""
 
 from __future__ import annotations
 
 import pytest
 
-from controller.runtime.loop import FakeClock, RateLoop, RealtimeSimulationClock, SimulationClock
+from controller.runtime.loop import CyclePacer, FakeClock, RateLoop, RealtimeSimulationClock, SimulationClock
 
 
 def test_ticks_on_deadlines_for_the_duration() -> None:
@@ -68,3 +68,51 @@ def test_realtime_clock_counts_physics_falling_behind_the_wall() -> None:
 def test_rate_must_be_positive() -> None:
     with pytest.raises(ValueError):
         RateLoop(FakeClock(), 0.0)
+
+
+def test_bus_cycles_run_on_their_deadlines_until_the_tick() -> None:
+    clock = FakeClock()
+    pacer = CyclePacer(clock, 250.0)
+    starts: list[float] = []
+
+    def cycle() -> None:
+        starts.append(clock.now())
+        clock.advance(0.001)
+
+    pacer.run_until(0.02, cycle)
+    assert starts == pytest.approx([0.0, 0.004, 0.008, 0.012, 0.016, 0.02])
+    assert clock.now() == pytest.approx(0.021) and pacer.missed == 0 and pacer.cycles == 6
+    pacer.run_until(0.04, cycle)  # the next tick's share: the grid goes on where it was
+    assert starts[6:] == pytest.approx([0.024, 0.028, 0.032, 0.036, 0.04])
+    assert pacer.periods == pytest.approx([0.004] * 10)
+
+
+def test_a_late_cycle_is_counted_as_missed_not_caught_up_with_a_burst() -> None:
+    clock = FakeClock()
+    pacer = CyclePacer(clock, 250.0)
+    starts: list[float] = []
+
+    def cycle() -> None:
+        starts.append(clock.now())
+        clock.advance(0.001)
+
+    pacer.run_until(0.008, cycle)  # cycles at 0, 4 and 8 ms
+    clock.advance(0.0095)  # the control tick's work ran long: it is now 18.5 ms, the 12 and 16 ms cycles are due
+    pacer.run_until(0.028, cycle)
+    # One cycle at once for the slots passed (12 ms missed, 16 ms taken late), then the grid again: never two in a slot.
+    assert starts == pytest.approx([0.0, 0.004, 0.008, 0.0185, 0.02, 0.024, 0.028])
+    assert pacer.missed == 1 and pacer.cycles == 7 and pacer.cycles + pacer.missed == 8  # 8 slots from 0 to 28 ms
+    assert max(pacer.periods) == pytest.approx(0.0105)
+
+
+def test_a_cycle_late_by_less_than_a_period_keeps_the_grid() -> None:
+    clock = FakeClock()
+    pacer = CyclePacer(clock, 500.0)
+    starts: list[float] = []
+
+    def cycle() -> None:
+        starts.append(clock.now())
+        clock.advance(0.0025 if len(starts) == 2 else 0.0005)  # the second cycle overruns its 2 ms by half a period
+
+    pacer.run_until(0.01, cycle)
+    assert starts == pytest.approx([0.0, 0.002, 0.0045, 0.006, 0.008, 0.01]) and pacer.missed == 0
