@@ -183,7 +183,7 @@ def test_bring_up_commands_open_the_robot_process_as_real_buses() -> None:
     assert scan.returncode == 0, scan.stderr
     rows = [line.split() for line in scan.stdout.splitlines()[1:-1]]
     assert len(rows) == 29 and all(row[3] == "True" for row in rows), scan.stdout  # every motor answered, RS-485 and slcan
-    assert scan.stdout.strip().endswith("29/29 motors answered")
+    assert scan.stdout.strip().splitlines()[-1].startswith("29/29 motors answered; 29/29 joints healthy")
     sweep = g1ctl("hw", "sweep", "--hardware", "sim-can-process", "--joint", "left_elbow_joint", "--fraction", "0.1", "--yes")
     assert sweep.returncode == 0 and json.loads(sweep.stdout.strip().splitlines()[-1])["completed"], sweep.stdout + sweep.stderr
 
