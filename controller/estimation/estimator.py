@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,7 +23,7 @@ from numpy.typing import NDArray
 from controller.assets import ensure_assets
 from controller.estimation.config import EstimatorConfig, load_estimator_config
 from controller.estimation.kinematics import LegKinematics
-from controller.estimation.step import POS, VEL, Memory, Outcome, estimator_step, fresh_memory, settings
+from controller.estimation.step import POS, VEL, Memory, Outcome, estimator_step, fresh_memory, load_compiled, settings
 from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
 
@@ -43,21 +42,9 @@ class StateEstimator:
         self._legs = np.array([list(joint_names).index(name) for name in kinematics.joint_names], dtype=np.intp)
         self._settings = settings(config)
         self.reset()
-        self._warm_up(len(joint_names))
+        load_compiled()  # now, not in a robot's first control tick
         self.update_seconds: list[float] = []  # wall time of each update: what the control tick waits for
         self.update_cpu_seconds: list[float] = []  # this thread's CPU time of each: the update's own cost, without preemption
-
-    def _warm_up(self, joints: int) -> None:
-        """One update on a standing reading, then forget it: the compiled step is loaded (or compiled) now, at
-        construction, not at a robot's first control tick, where a 0.4 s stall (more on a first run) would starve it."""
-        standing = RobotState(
-            time=0.0, joint_pos=np.zeros(joints), joint_vel=np.zeros(joints), base_quat=np.array([1.0, 0.0, 0.0, 0.0]),
-            base_ang_vel=np.zeros(3), base_pos=np.zeros(3), base_lin_vel=np.zeros(3), has_base_position=False,
-            imu_accel=np.array([0.0, 0.0, self.config.gravity]), joint_tau=np.zeros(joints),
-        )  # fmt: skip
-        self._step(standing)
-        self._step(replace(standing, time=0.02))
-        self.reset()
 
     @classmethod
     def for_g1(cls, joint_names: Sequence[str], config_path: str | None = None, assets_dir: str | None = None) -> StateEstimator:

@@ -109,6 +109,21 @@ def fresh_memory() -> FloatArray:
     return memory
 
 
+def load_compiled() -> None:
+    """Run `estimator_step` once, on scratch arrays of the types a robot's readings have: numba loads its machine code
+    from the cache now (0.2-1 s), or compiles it on a machine's first run (seconds). Called before a robot starts
+    (the run driver, the estimator's constructor), never in a control tick, where the wait would starve the robot."""
+    legs, model = np.arange(12, dtype=np.intp), LegConstants(*(np.zeros(shape) for shape in _MODEL_SHAPES))
+    quat, accel, joints = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 9.81]), np.zeros(12)
+    scratch = (np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3, 6)), np.zeros((2, 3, 6)))
+    x, p, memory, values = np.zeros((4, 3)), np.zeros((4, 4)), fresh_memory(), np.ones(len(Setting))
+    for dt, first in ((0.0, True), (0.02, False)):
+        estimator_step(quat, np.zeros(3), accel, joints, joints, legs, dt, first, model, values, x, p, memory, *scratch)
+
+
+_MODEL_SHAPES = ((2, 6, 3, 3), (2, 6, 3, 3), (2, 6, 3, 3), (2, 6, 3), (2, 6, 3), (3,))  # LegConstants' fields
+
+
 @njit(cache=True)
 def estimator_step(
     quat: FloatArray,

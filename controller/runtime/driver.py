@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 from tqdm import tqdm
 
 from controller.assets import ensure_assets
+from controller.estimation.step import load_compiled
 from controller.inputs.registry import open_input
 from controller.reports import write_report
 from controller.runtime.backend_registry import BuiltBackend
@@ -112,6 +113,8 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
     assets = ensure_assets(plan.assets_dir)
     tracker = make_tracker(plan.tracker, TrackerSpec(plan.policy, assets, g1.JOINT_NAMES))
     scheduling = request_realtime(plan.rt_priority, plan.cpu)  # before the robot side starts its threads: they inherit it
+    if plan.estimator:
+        load_compiled()  # the estimator's compiled step, before a robot that runs on its own is started (seconds on a first run)
     side = plan.backend.builder()(plan, assets, stack)
     backend = side.backend
     source = stack.enter_context(
