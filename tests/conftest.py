@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -21,6 +22,7 @@ from onnx import TensorProto, helper, numpy_helper
 from controller.assets import Assets, ensure_assets
 from hw import g1, quat
 from hw.g1 import JOINT_NAMES
+from hw.types import RobotState
 
 if TYPE_CHECKING:
     import mujoco
@@ -257,3 +259,19 @@ def sim_can_on_real_buses(tmp_path: Path, can0: str | None = None) -> Path:
     path = tmp_path / "real-buses.yaml"
     path.write_text(text + "\n")
     return path
+
+
+def planar_state(
+    t: float, x: float, y: float, heading_deg: float = 0.0, v: tuple[float, float] = (0.0, 0.0), yaw_rate: float = 0.0
+) -> RobotState:
+    """The robot at (x, y) facing `heading_deg`, moving at world velocity `v`, turning at `yaw_rate` (no tilt)."""
+    joints = np.array(g1.default_joint_vector())
+    return RobotState(
+        time=t,
+        joint_pos=joints,
+        joint_vel=np.zeros_like(joints),
+        base_quat=quat.from_yaw(math.radians(heading_deg)),
+        base_ang_vel=np.array([0.0, 0.0, yaw_rate]),
+        base_pos=np.array([x, y, g1.STANDING_PELVIS_HEIGHT]),
+        base_lin_vel=np.array([v[0], v[1], 0.0]),
+    )

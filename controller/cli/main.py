@@ -14,8 +14,10 @@ Usage (each command group's module shows its own):
     g1ctl assets fetch|path, g1ctl scenarios   assets, and what ships by name (controller/cli/catalog.py)
 
 Every command that needs the G1 model or policies fetches them first (see `g1ctl assets`).
-A mistake in the input ends with one line on stderr and exit status 2; a fault during
-a run, or a run aborted by an error, with exit status 1 (its report written first).
+A mistake in the input ends with one line on stderr and exit status 2; a prompt the text
+planner refuses (it cannot do what was asked, or the prompt is empty, too long or not text),
+a fault during a run, or a run aborted by an error, with exit status 1 (a run's report written
+first).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from types import ModuleType
 from controller.cli import bench, catalog, dataset, log, plan, planner, robot, run, sim
 from controller.cli import eval as eval_commands
 from controller.cli import hw as hw_commands
+from controller.text.program import PromptRefused
 from hw.errors import G1Error, HardwareFault, RunAborted
 
 # Command name -> the module that parses it and runs it. Each module imports its heavy
@@ -54,6 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="g1ctl: %(message)s")
     try:
         return int(COMMANDS[args.command].run(args))
+    except PromptRefused as exc:  # what was asked cannot be planned: nothing moved
+        print(f"g1ctl: refused: {exc}", file=sys.stderr)
+        return 1
     except (HardwareFault, RunAborted) as exc:  # the run started and ended in a fault: not a usage mistake
         print(f"g1ctl: fault: {exc}", file=sys.stderr)
         return 1

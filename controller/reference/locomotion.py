@@ -3,8 +3,8 @@
 MotionBricks' primitive: from the root state at the end of the context and the command,
 the critically damped spring of `root_spring` gives the root path over the next plan; the
 planner is asked to meet its position and heading at the plan's last frame, and fills in
-the whole-body motion (steps, arm swing) that gets there. A gesture in force (`set_gesture`)
-adds arm keyframes over the plan (`gestures.py`), layered on whatever the legs do.
+the whole-body motion (steps, arm swing) that gets there. Gestures in force (`set_gestures`, one
+per arm) add arm keyframes over the plan (`gestures.py`), layered on whatever the legs do.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ class SmartLocomotion:
         self.path: RootTrajectory | None = None  # the root path of the latest request
         self.path_start = 0.0  # run time of the path's frame 0 is path_start + 1/fps
         self.library = GestureLibrary(cfg.gestures)
-        self.gestures: tuple[Gesture, ...] = ()  # the gesture in force (end inf) last, after those still blending out
+        self.gestures: tuple[Gesture, ...] = ()  # those in force (end inf) and those still blending out, by start
         self.text_embedding: FloatArray | None = None  # the planner's text conditioning (a text plan's clause), None: none
         # While a gesture is in force, the arm joints it does not move stay on the base pose ("raise your right
         # arm": the left one stays down). Off, the planner swings them as it likes: the shipped planner, half of
@@ -59,24 +59,37 @@ class SmartLocomotion:
 
     @property
     def gesture(self) -> Gesture | None:
-        """The gesture in force (name and start time), None when none is."""
-        last = self.gestures[-1] if self.gestures else None
-        return last if last is not None and math.isinf(last.end) else None
+        """The gesture in force last started (name and start time), None when none is."""
+        in_force = [g for g in self.gestures if math.isinf(g.end)]
+        return in_force[-1] if in_force else None
+
+    @property
+    def in_force(self) -> tuple[str, ...]:
+        """The names of the gestures in force (not ending), in the order they started."""
+        return tuple(g.name for g in self.gestures if math.isinf(g.end))
 
     def set_gesture(self, name: str, t: float) -> bool:
-        """The gesture asked for at run time `t` ("" or "none": none): a new name starts at `t`, the previous one ends there.
+        """The one gesture asked for at run time `t` ("" or "none": none); see `set_gestures`."""
+        return self.set_gestures(() if name in NONE_NAMES else (name,), t)
 
-        True when that changed the gesture: a plan asked for at once starts its blend on time.
+    def set_gestures(self, names: tuple[str, ...], t: float) -> bool:
+        """The gestures asked for at run time `t`, one per arm (a text clause's arm tracks).
+
+        A name not yet in force starts at `t`; one in force that is asked for again goes on
+        (a pose held across clauses is not restarted); one no longer asked for ends at `t` and
+        blends out. True when that changed anything: a plan asked for at once starts its blend
+        on time.
         """
-        name = "" if name in NONE_NAMES else name
-        current = self.gesture
-        if (current.name if current else "") == name:
+        wanted = tuple(dict.fromkeys(n for n in names if n not in NONE_NAMES))
+        current = self.in_force
+        if set(wanted) == set(current):
             return False
-        if name:
+        for name in wanted:
             self.library.style(name)  # an unknown name fails here, naming the valid ones
         blend = self.cfg.gestures.blend_s
-        ended = (replace(g, end=t) if math.isinf(g.end) else g for g in self.gestures)
-        self.gestures = tuple(g for g in ended if g.alive(t, blend)) + ((Gesture(name, t),) if name else ())
+        ended = (replace(g, end=t) if math.isinf(g.end) and g.name not in wanted else g for g in self.gestures)
+        kept = tuple(g for g in ended if g.alive(t, blend))
+        self.gestures = kept + tuple(Gesture(name, t) for name in wanted if name not in current)
         return True
 
     def path_velocity(self, t: float) -> VelocityCommand | None:

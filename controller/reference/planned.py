@@ -29,7 +29,7 @@ from controller.reference.buffer import ReferenceBuffer
 from controller.reference.locomotion import LocomotionConfig, SmartLocomotion
 from controller.reference.scheduler import ReplanScheduler, SchedulerConfig
 from controller.reference.source import ReferenceSource
-from controller.reference.waypoints import WaypointFollower
+from controller.reference.waypoints import Follower
 from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
 from hw import g1, quat
@@ -59,7 +59,7 @@ class PlannedReference(ReferenceSource):
         simulated_clock: bool = True,
         joint_limits: tuple[FloatArray, FloatArray] | None = None,
         seed: int = 0,
-        follower: WaypointFollower | None = None,  # waypoints mode: the command comes from it
+        follower: Follower | None = None,  # waypoints mode (or a curve): the command comes from it
     ) -> None:
         self.cfg = cfg
         self.follower = follower
@@ -99,7 +99,10 @@ class PlannedReference(ReferenceSource):
         if self.follower is not None:
             self.follower.start(state)
 
-    def window(self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False) -> ReferenceWindow:
+    def window(
+        self, state: RobotState, velocity: VelocityCommand, gesture: str = "", hold: bool = False, gestures: tuple[str, ...] | None = None
+    ) -> ReferenceWindow:
+        """The window of this tick; `gestures` (one per arm, a text clause's tracks) in place of the one `gesture` when given."""
         t = state.time
         now = self.buffer.sample(t)
         # Standing in place the plan stays where the robot stood (measured on `wave`: moving it onto a robot that
@@ -115,7 +118,8 @@ class PlannedReference(ReferenceSource):
             velocity = self.follower.command(state)
             planned = self.follower.plan_command(now.qpos, self.cfg.locomotion.spring)
         changed = self._last_command is None or _differs(planned, self._last_command, self.cfg.command_change)
-        changed = self.locomotion.set_gesture(gesture, t) or changed
+        asked = gestures if gestures is not None else ((gesture,) if gesture else ())
+        changed = self.locomotion.set_gestures(asked, t) or changed
         if changed:
             self._last_command = planned
         self.locomotion.command = planned

@@ -13,12 +13,12 @@ from controller.reference.window import ReferenceWindow
 from hw.types import RobotState
 
 if TYPE_CHECKING:
-    from controller.reference.waypoints import WaypointFollower
+    from controller.reference.waypoints import Follower
 
 
 class ReferenceSource(abc.ABC):
     needs_base_position = False  # True: it walks to positions (waypoints, re-anchored plans), so it stands when the estimate fails
-    follower: WaypointFollower | None = None  # the waypoints it walks to, if any (their errors are judged by the truth too)
+    follower: Follower | None = None  # the waypoints (or curve) it walks to, if any (their errors are judged by the truth too)
 
     def start(self, state: RobotState) -> None:  # noqa: B027 - optional: most sources need no starting pose
         """The run begins with the robot in `state`."""

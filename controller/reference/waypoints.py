@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from controller.commands.velocity import ZERO, CommandLimits, VelocityCommand
 from controller.commands.waypoints import WorldWaypoint
@@ -90,6 +90,24 @@ class WaypointConfig:
             raise ConfigError(
                 "the stop band must lie inside the tolerances (stop_radius < position_tolerance, stop_angle_deg < heading_tolerance_deg)"
             )
+
+
+class Follower(Protocol):
+    """What the planned reference steers by in the waypoints mode: a `WaypointFollower`, or a curve's (`curves.py`)."""
+
+    @property
+    def done(self) -> bool: ...
+
+    @property
+    def errors(self) -> list[WaypointError]: ...
+
+    def start(self, state: RobotState) -> None: ...
+
+    def command(self, state: RobotState) -> VelocityCommand: ...
+
+    def plan_command(self, qpos: FloatArray, spring: SpringConfig | None = None) -> VelocityCommand: ...
+
+    def report(self) -> dict[str, Any]: ...
 
 
 @dataclass(frozen=True)

@@ -43,11 +43,12 @@ import numpy as np
 
 from controller.commands.velocity import ZERO, CommandLimits, VelocityCommand
 from controller.commands.waypoints import WorldWaypoint
+from controller.reference.curves import CurveFollower
 from controller.reference.planned import PlannedReference
 from controller.reference.source import ReferenceSource
-from controller.reference.waypoints import WaypointConfig, WaypointFollower
+from controller.reference.waypoints import Follower, WaypointConfig, WaypointFollower
 from controller.reference.window import ReferenceWindow
-from controller.text.program import Clause, Program, library_gesture
+from controller.text.program import Clause, Curve, Program, library_gesture
 from hw import g1, quat
 from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
@@ -56,6 +57,7 @@ Pose = tuple[float, float, float]  # x, y (m, world), heading (rad, unwrapped)
 # Slowing down inside the follower's slow radius, then settling (at rest for 0.3 s): measured on
 # "walk forward half a meter and back, twice", four waypoints took 2-2.5 s each beyond path / speed.
 SETTLE_PER_WAYPOINT_S = 2.0
+YAW_RATE_AT_FINISH = 0.8  # rad/s: a curve's end pose is settled at the clause's default turning rate
 
 
 def _clause_waypoints() -> WaypointConfig:
@@ -152,6 +154,9 @@ def estimate_seconds(clause: Clause, intended_start: Pose, pose: Pose) -> float:
     """How long the clause should take from `pose`: its path at its speed, its turns at its rate, at least its minimum duration."""
     if clause.motion is None:
         return clause.min_duration_s
+    if isinstance(clause.motion, Curve):
+        along = clause.motion.length_m + math.hypot(intended_start[0] - pose[0], intended_start[1] - pose[1])
+        return max(along / clause.motion.speed_mps + SETTLE_PER_WAYPOINT_S, clause.min_duration_s)
     motion, seconds, here = clause.motion, 0.0, pose
     for w in motion.waypoints:
         target = from_frame(intended_start, w.forward_m, w.left_m, math.radians(w.heading_deg))
@@ -231,9 +236,11 @@ class TextReference(ReferenceSource):
                     self.planned.follower = None
                     self.planned.locomotion.text_embedding = None
         running = self.current
-        gestures = running.clause.gestures if running is not None else ()
-        gesture = library_gesture(gestures[0]) if gestures else ""
-        window = self.planned.window(state, ZERO if running is not None else velocity, gesture, hold)
+        if running is not None:  # every arm track of the clause (CoMA's body-part split)
+            tracks = tuple(library_gesture(g) for g in running.clause.gestures)
+            window = self.planned.window(state, ZERO, hold=hold, gestures=tracks)
+        else:
+            window = self.planned.window(state, velocity, gesture, hold)
         if running is not None and window.plan is not None:
             running.reference.append(np.array(window.plan.qpos))
         return window
@@ -246,8 +253,15 @@ class TextReference(ReferenceSource):
         t = state.time - self._t0
         truth_track = PoseTrack.begin(truth) if truth is not None else None
         record = ClauseRecord(index, clause, round(t, 4), PoseTrack.begin(state), self._intended, truth_track)
-        follower = None
-        if clause.motion is not None:
+        follower: Follower | None = None
+        if isinstance(clause.motion, Curve):
+            arcs = [(arc.radius_m, math.radians(arc.angle_deg)) for arc in clause.motion.arcs]
+            finish = _with_rates(self.cfg.waypoints, clause.motion.speed_mps, YAW_RATE_AT_FINISH)
+            follower = CurveFollower(self._intended, arcs, clause.motion.speed_mps, finish, self.limits)
+            follower.start(state)
+            end = clause.motion.end
+            self._intended = from_frame(self._intended, end.forward_m, end.left_m, math.radians(end.heading_deg))
+        elif clause.motion is not None:
             waypoints = []
             for w in clause.motion.waypoints:
                 x, y, h = from_frame(self._intended, w.forward_m, w.left_m, math.radians(w.heading_deg))

@@ -21,6 +21,13 @@ GESTURE_NAMES: tuple[str, ...] = (
     "reach", "point", "arms_crossed", "hands_on_hips",
 )  # fmt: skip
 DETECTED_GESTURES: tuple[str, ...] = GESTURE_NAMES[:6]  # what the motion detector recognizes in executed arm motion
+# The arms each gesture moves: a clause has at most one gesture per arm.
+GESTURE_ARMS: dict[str, frozenset[str]] = {
+    "wave_left": frozenset({"left"}), "wave_right": frozenset({"right"}), "wave_both": frozenset({"left", "right"}),
+    "raise_left": frozenset({"left"}), "raise_right": frozenset({"right"}), "raise_both": frozenset({"left", "right"}),
+    "reach": frozenset({"right"}), "point": frozenset({"right"}), "arms_crossed": frozenset({"left", "right"}),
+    "hands_on_hips": frozenset({"left", "right"}),
+}  # fmt: skip
 LIBRARY_NAME = {"wave_right": "wave"}  # report name -> gesture library name, where they differ
 
 
@@ -66,26 +73,88 @@ class Motion:
 
 
 @dataclass(frozen=True)
+class Arc:
+    """A piece of a curved path: `length_m` along a circle of `radius_m`, turning `angle_deg` (+ left, - right)."""
+
+    radius_m: float
+    angle_deg: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.radius_m) and self.radius_m > 0 and math.isfinite(self.angle_deg) and self.angle_deg != 0):
+            raise ValueError(f"an arc needs a positive radius and a non-zero angle, got {self.radius_m} m, {self.angle_deg} deg")
+
+    @property
+    def length_m(self) -> float:
+        return self.radius_m * math.radians(abs(self.angle_deg))
+
+    @property
+    def end(self) -> RelativeWaypoint:
+        """Where the arc ends in the frame of its start."""
+        a = math.radians(self.angle_deg)
+        sign = 1.0 if a > 0 else -1.0
+        return RelativeWaypoint(self.radius_m * math.sin(abs(a)), sign * self.radius_m * (1 - math.cos(a)), self.angle_deg)
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A curved path followed as one continuous curve (a velocity with a yaw rate), never stop-and-go: arcs one after another.
+
+    A circle is one arc of 360 degrees, a figure eight two of opposite sides, walking while
+    turning one arc whose radius is the walk's length over the turn's angle.
+    """
+
+    arcs: tuple[Arc, ...]
+    speed_mps: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not self.arcs:
+            raise ValueError("a curve needs at least one arc")
+        if not 0.0 < self.speed_mps <= 1.5:
+            raise ValueError(f"curve speed {self.speed_mps} m/s out of range")
+
+    @property
+    def length_m(self) -> float:
+        return sum(arc.length_m for arc in self.arcs)
+
+    @property
+    def end(self) -> RelativeWaypoint:
+        f = lt = h = 0.0
+        for arc in self.arcs:
+            e = arc.end
+            c, s = math.cos(math.radians(h)), math.sin(math.radians(h))
+            f, lt, h = f + c * e.forward_m - s * e.left_m, lt + s * e.forward_m + c * e.left_m, h + e.heading_deg
+        return RelativeWaypoint(f, lt, h)
+
+
+@dataclass(frozen=True)
 class Clause:
     """One ordered part of a prompt and the behaviour it resolved to.
 
-    `motion` None: the robot stays where it is (a gesture, a pause). `min_duration_s`: the
-    clause lasts at least this long (a wave of 3 s, "wait two seconds"); with a motion it
-    lasts until the robot has arrived and this long has passed. `quantities`: what was read
-    from the text (for printing and reports), e.g. {"distance_m": 2.0, "turn_deg": 90}.
+    `motion` None: the robot stays where it is (a gesture, a pause); a `Motion` goes through
+    waypoints and stops at each, a `Curve` is followed without stopping. `gestures`: the arm
+    tracks, at most one gesture per arm (CoMA's body-part split: "wave with your left hand
+    while raising the right" is wave_left and raise_right). `min_duration_s`: the clause
+    lasts at least this long (a wave of 3 s, "wait two seconds"); with a motion it lasts
+    until the robot has arrived and this long has passed. `quantities`: what was read from
+    the text (for printing and reports), e.g. {"distance_m": 2.0, "turn_deg": 90}. `source`:
+    the index of the typed clause it comes from (a repetition, "twice", is a clause of its own).
     """
 
     text: str
-    motion: Motion | None = None
+    motion: Motion | Curve | None = None
     gestures: tuple[str, ...] = ()
     min_duration_s: float = 0.0
     clip: str | None = None
     quantities: dict[str, float | str] = field(default_factory=dict)
+    source: int = 0
 
     def __post_init__(self) -> None:
         unknown = [g for g in self.gestures if g not in GESTURE_NAMES]
         if unknown:
             raise ValueError(f"unknown gestures {unknown}; valid: {', '.join(GESTURE_NAMES)}")
+        shared = [(a, b) for i, a in enumerate(self.gestures) for b in self.gestures[i + 1 :] if GESTURE_ARMS[a] & GESTURE_ARMS[b]]
+        if shared:
+            raise ValueError(f"gestures {shared[0][0]} and {shared[0][1]} move the same arm")
         if not (math.isfinite(self.min_duration_s) and self.min_duration_s >= 0):
             raise ValueError(f"min_duration_s must be a non-negative number, got {self.min_duration_s}")
 
@@ -108,3 +177,8 @@ class Program:
     def __post_init__(self) -> None:
         if not self.clauses:
             raise ValueError("a program needs at least one clause")
+
+    @property
+    def typed_clauses(self) -> int:
+        """How many clauses the prompt was read into (a repeated clause counts once)."""
+        return len({clause.source for clause in self.clauses})

@@ -74,10 +74,12 @@ def test_a_plan_that_walks_on_hardware_needs_a_base_position(tmp_path: Path) -> 
     assert report["total_displacement_estimate"] is not None
 
 
-@pytest.mark.parametrize("prompt", ["do a backflip", "walk forward 500 meters"])
+@pytest.mark.parametrize(
+    "prompt", ["do a backflip", "walk forward 500 meters", "", "walk " * 120, "\x01\x02", "walk until you see the door", "and then"]
+)
 def test_requests_the_stack_cannot_do_are_refused_in_one_line(prompt: str) -> None:
-    line = one_line_error(g1ctl("plan", prompt, "--sim"))
-    assert "cannot plan" in line and "walk" in line  # names the part and what the stack can do
+    line = one_line_error(g1ctl("plan", prompt, "--sim"), code=1)
+    assert line.startswith("g1ctl: refused: cannot plan") and "walk" in line  # names the part and what the stack can do
 
 
 def test_video_needs_a_simulated_run() -> None:

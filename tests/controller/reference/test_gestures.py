@@ -140,6 +140,21 @@ def test_the_gesture_keeps_its_start_while_asked_for_and_blends_out_after_it_end
     assert locomotion.gestures == ()
 
 
+def test_one_gesture_per_arm_at_once_each_kept_ended_or_started_on_its_own() -> None:
+    locomotion = SmartLocomotion()
+    assert locomotion.set_gestures(("wave_left", "raise_right"), 1.0)
+    assert locomotion.in_force == ("wave_left", "raise_right")
+    assert not locomotion.set_gestures(("raise_right", "wave_left"), 1.2)  # the same tracks: nothing restarts
+    assert locomotion.set_gestures(("raise_right",), 3.0)  # the right arm's pose held on, the wave ends
+    assert locomotion.gestures == (Gesture("wave_left", 1.0, end=3.0), Gesture("raise_right", 1.0))
+    request = locomotion.request(CONTEXT, 2.0)
+    arms = [k for k in request.keyframes if k.joints.any()]
+    left_elbow, right_roll = g1.JOINT_NAMES.index("left_elbow_joint"), g1.JOINT_NAMES.index("right_shoulder_roll_joint")
+    assert all(k.joints[left_elbow] and k.joints[right_roll] for k in arms[:3])  # both arms shaped while the wave blends out
+    expected = player_angles("raise_right", 1.0, 2.0 + (arms[0].frame + 1) / FPS)
+    assert arms[0].qpos[g1.QPOS_JOINTS][right_roll] == pytest.approx(expected[right_roll])
+
+
 def test_arms_on_the_root_targets_frame_merge_into_it() -> None:
     locomotion = SmartLocomotion()
     locomotion.set_gesture("point", 0.0)

@@ -15,27 +15,13 @@ from controller.planner.request import Plan, PlanRequest
 from controller.reference.planned import PlannedReference, PlannedReferenceConfig
 from controller.reference.root_spring import SpringConfig, no_overshoot_gain
 from controller.reference.waypoints import WaypointConfig, WaypointFollower, WaypointReference
-from hw import g1, quat
+from hw import g1
 from hw.errors import ConfigError
 from hw.shipped import model_dir
-from hw.types import RobotState
+from tests.conftest import planar_state as state
 
 CFG = WaypointConfig()
 HOLD = CFG.settle_hold_s
-
-
-def state(t: float, x: float, y: float, heading_deg: float = 0.0, v: tuple[float, float] = (0.0, 0.0), yaw_rate: float = 0.0) -> RobotState:
-    """The robot at (x, y) facing `heading_deg`, moving at world velocity `v`, turning at `yaw_rate` (no tilt)."""
-    joints = np.array(g1.default_joint_vector())
-    return RobotState(
-        time=t,
-        joint_pos=joints,
-        joint_vel=np.zeros_like(joints),
-        base_quat=quat.from_yaw(math.radians(heading_deg)),
-        base_ang_vel=np.array([0.0, 0.0, yaw_rate]),
-        base_pos=np.array([x, y, g1.STANDING_PELVIS_HEIGHT]),
-        base_lin_vel=np.array([v[0], v[1], 0.0]),
-    )
 
 
 def follower(*targets: tuple[float, float, float], **kwargs: float) -> WaypointFollower:
