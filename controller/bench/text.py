@@ -1,17 +1,27 @@
-"""`g1ctl bench text`: a suite of typed prompts run on the simulated G1, each passed or failed with its reason.
+"""`g1ctl bench text`: a suite of typed prompts, each read, run on the simulated G1 and passed or failed with its reason.
 
-For each prompt of the suite (`configs/prompts/suite.yaml` by default): resolve it; a
-prompt marked `refuse` passes when it is refused. Otherwise it runs in simulation (the
-planner in the loop, blended joins) and passes when the robot did not fall, the number of
-clauses is the expected one, the total displacement and heading change measured in the
-start frame are within the tolerances, and every expected gesture was detected in the
-executed arm motion. Then the same program runs kinematically (an ideal robot whose
-root moves as commanded, no physics) twice, with blended joins and with naive concatenation, so that the two
-`transition_score`s compare the composition alone.
+Suites (`configs/prompts/suite.yaml` by default; `--suite PATH`, e.g. the held-out
+`configs/prompts/heldout.yaml`) state for each prompt either that it must be refused
+(`refuse`), what the whole prompt does (`expect`: the typed clause count, the total
+displacement and turn, the gestures seen somewhere: the project's suite), or what each
+clause does (`clauses`: displacement in the clause's start frame, turn, gestures: the
+held-out suites). `carry_or_refuse` prompts, written to tempt a parser into misreading,
+pass refused or carried out as expected, never run as something else.
 
-Reported: per prompt pass/fail with the reason and the figures; the success rate; the
-order accuracy of the prompts of 3 and of 4 clauses; the transition scores (simulated,
-and kinematic blended against naive).
+Per prompt: resolve it (`PromptRefused`: a refusal); check the program against the
+expectation before anything moves (`text_judge.read_as_expected`: a mismatch is a prompt
+that would have run as something other than what was asked, and is not run); run it in
+simulation (the planner in the loop, blended joins) and judge what it did, clause by
+clause where the suite says (`text_judge.judge_clauses`, unasked gestures failing). Then the
+program runs kinematically (an ideal robot whose root moves as commanded, no physics) with
+blended joins, with the crossfade baseline of the same length (the next clause planned from
+a standing pose and crossfaded over the same frames) and with naive concatenation, so that
+their `transition_score`s compare the composition alone.
+
+Reported: per prompt pass/fail with the reason and the figures; the success rate; prompts run
+as something else; prompts refused that should have run; order accuracy of the prompts of 3
+and of 4 clauses; pass rates per tag; the share of parts decided by the lexicon and by the
+encoder; the transition scores.
 """
 
 from __future__ import annotations
@@ -25,7 +35,16 @@ from typing import Any
 
 import numpy as np
 
-from controller.text.program import DETECTED_GESTURES, Program, PromptRefused
+from controller.bench.text_judge import (
+    ClauseExpectation,
+    Tolerances,
+    in_expected_order,
+    judge_clauses,
+    read_as_expected,
+    read_totals_as_expected,
+)
+from controller.text.executor import TextRunConfig
+from controller.text.program import DETECTED_GESTURES, GESTURE_NAMES, Program, PromptRefused
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_yaml
@@ -40,18 +59,32 @@ class Expectation:
     gestures: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        unknown = [g for g in self.gestures if g not in DETECTED_GESTURES]
-        if unknown:
-            raise ConfigError(f"expected gestures {unknown} cannot be detected; use {', '.join(DETECTED_GESTURES)}")
+        _check_gestures(self.gestures)
 
 
 @dataclass(frozen=True)
 class SuitePrompt:
     text: str
-    expect: Expectation = field(default_factory=Expectation)
+    expect: Expectation | None = None  # the whole prompt (the project's suite)
+    clauses: tuple[ClauseExpectation, ...] = ()  # each clause (the held-out suites)
     refuse: bool = False
+    carry_or_refuse: bool = False  # refused, or carried out as expected: never run as something else
+    tags: tuple[str, ...] = ()
     position_tolerance_m: float | None = None
     heading_tolerance_deg: float | None = None
+
+    def __post_init__(self) -> None:
+        stated = sum((self.refuse, self.expect is not None, bool(self.clauses)))
+        if stated != 1 or (self.carry_or_refuse and not self.clauses and self.expect is None):
+            raise ConfigError(f'prompt "{self.text}": give exactly one of refuse, expect or clauses (carry_or_refuse needs one)')
+        for c in self.clauses:
+            _check_gestures(c.gestures)
+
+
+def _check_gestures(names: tuple[str, ...]) -> None:
+    unknown = [g for g in names if g not in GESTURE_NAMES]
+    if unknown:
+        raise ConfigError(f"expected gestures {unknown} are not gestures it plans; use {', '.join(GESTURE_NAMES)}")
 
 
 @dataclass(frozen=True)
@@ -77,30 +110,45 @@ def load_suite(path: Path | None = None) -> Suite:
     return suite
 
 
-def judge(prompt: SuitePrompt, defaults: SuiteDefaults, result: dict[str, Any]) -> tuple[bool, str]:
-    """Pass or fail of one executed prompt, and why."""
-    e = prompt.expect
+def tolerances(prompt: SuitePrompt, defaults: SuiteDefaults) -> Tolerances:
+    return Tolerances(
+        prompt.position_tolerance_m or defaults.position_tolerance_m, prompt.heading_tolerance_deg or defaults.heading_tolerance_deg
+    )
+
+
+def read_check(prompt: SuitePrompt, program: Program) -> tuple[bool, str]:
+    """Was the prompt read as the suite expects, before anything moves?"""
+    if prompt.clauses:
+        return read_as_expected(program, prompt.clauses)
+    e = prompt.expect or Expectation()
+    return read_totals_as_expected(program, e.clauses, e.forward_m, e.left_m, e.heading_deg, e.gestures)
+
+
+def judge(prompt: SuitePrompt, defaults: SuiteDefaults, result: dict[str, Any]) -> tuple[bool, str, list[dict[str, Any]]]:
+    """Pass or fail of one executed prompt, why, and the verdict per clause (per-clause suites)."""
     if result["falls"]:
-        return False, f"fell {result['falls']} time(s)"
-    if e.clauses is not None and result["clauses_planned"] != e.clauses:
-        return False, f"planned {result['clauses_planned']} clauses, expected {e.clauses}"
-    done = sum(1 for c in result["clauses"])
+        return False, f"fell {result['falls']} time(s)", []
+    done = len(result["clauses"])
     if done != result["clauses_planned"]:
-        return False, f"only {done} of {result['clauses_planned']} clauses ran"
-    position_tol = prompt.position_tolerance_m or defaults.position_tolerance_m
-    heading_tol = prompt.heading_tolerance_deg or defaults.heading_tolerance_deg
+        return False, f"only {done} of {result['clauses_planned']} clauses ran", []
+    tol = tolerances(prompt, defaults)
+    if prompt.clauses:
+        return judge_clauses(result["clauses"], prompt.clauses, tol, DETECTED_GESTURES)
+    e = prompt.expect or Expectation()
     forward, left = result["total_displacement"]
     miss = math.hypot(forward - e.forward_m, left - e.left_m)
-    if miss > position_tol:
-        return False, f"ended {miss:.2f} m from the expected place ({forward:.2f}, {left:.2f} against {e.forward_m}, {e.left_m})"
-    heading_miss = abs(result["total_heading_change_deg"] - e.heading_deg)
-    if heading_miss > heading_tol:
-        return False, f"turned {result['total_heading_change_deg']:.0f} degrees, expected {e.heading_deg:.0f}"
+    if miss > tol.position_m:
+        return False, f"ended {miss:.2f} m from the expected place ({forward:.2f}, {left:.2f} against {e.forward_m}, {e.left_m})", []
+    if abs(result["total_heading_change_deg"] - e.heading_deg) > tol.heading_deg:
+        return False, f"turned {result['total_heading_change_deg']:.0f} degrees, expected {e.heading_deg:.0f}", []
     seen = {g for c in result["clauses"] for g in c["gestures"]}
-    missing = [g for g in e.gestures if g not in seen]
+    missing = [g for g in e.gestures if g in DETECTED_GESTURES and g not in seen]
     if missing:
-        return False, f"gestures {missing} not seen in the arm motion (seen: {sorted(seen) or 'none'})"
-    return True, "ok"
+        return False, f"gestures {missing} not seen in the arm motion (seen: {sorted(seen) or 'none'})", []
+    unasked = sorted(seen - set(e.gestures))
+    if unasked:
+        return False, f"gestures {unasked} seen but not asked for", []
+    return True, "ok", []
 
 
 @dataclass(frozen=True)
@@ -109,56 +157,91 @@ class TextBenchConfig:
     seed: int = 0
     policy: str = "fastsac"
     limit: int | None = None  # only the first N prompts (a quick look)
-    kinematic: bool = True  # also compare blended with naive joins on the composed plan alone
+    kinematic: bool = True  # also compare blended joins with the crossfade and naive baselines on the composed plan alone
+
+
+BLEND_FRAMES = TextRunConfig().blend_frames
 
 
 def run_text_bench(
     cfg: TextBenchConfig,
     resolve: Callable[[str], Program],
     simulate: Callable[[Program], dict[str, Any]],
-    compose: Callable[[Program, int | None], float | None],
+    compose: Callable[[Program, int | None, bool], float | None],
     progress: Callable[[str], None] = lambda line: None,
 ) -> dict[str, Any]:
-    """Run the suite: `resolve` (text -> program or PromptRefused), `simulate` (program -> text report), `compose` (kinematic score)."""
+    """Run the suite: `resolve` (text -> program or PromptRefused), `simulate` (program -> text report), `compose` (program,
+    blend frames or None, continue the motion -> kinematic transition score)."""
     suite = load_suite(cfg.suite)
     prompts = suite.prompts[: cfg.limit] if cfg.limit else suite.prompts
     rows = []
     started = time.perf_counter()
     for prompt in prompts:
-        row: dict[str, Any] = {"text": prompt.text, "refuse": prompt.refuse}
-        try:
-            program = resolve(prompt.text)
-        except PromptRefused as exc:
-            row |= {"pass": prompt.refuse, "reason": f"refused: {exc}" if prompt.refuse else f"refused, but should run: {exc}"}
-            rows.append(row)
-            progress(f"{'PASS' if row['pass'] else 'FAIL'} {prompt.text!r}: {row['reason']}")
-            continue
-        if prompt.refuse:
-            row |= {"pass": False, "reason": f"planned {len(program.clauses)} clause(s), but should be refused"}
-            rows.append(row)
-            progress(f"FAIL {prompt.text!r}: {row['reason']}")
-            continue
-        result = simulate(program)
-        passed, reason = judge(prompt, suite.defaults, result)
-        row |= {
-            "pass": passed,
-            "reason": reason,
-            "clauses": len(program.clauses),
-            "falls": result["falls"],
-            "total_displacement": result["total_displacement"],
-            "total_heading_change_deg": result["total_heading_change_deg"],
-            "gestures": sorted({g for c in result["clauses"] for g in c["gestures"]}),
-            "order_accuracy": result["order_accuracy"],
-            "transition_score": result["transition_score"],
-            "run_seconds": result["run"]["run_seconds"],
-            "timed_out_clauses": sum(c["timed_out"] for c in result["clauses"]),
-        }
-        if cfg.kinematic and len(program.clauses) > 1:
-            row["transition_kinematic_blended"] = _rounded(compose(program, 8))
-            row["transition_kinematic_naive"] = _rounded(compose(program, None))
+        row = _run_prompt(prompt, suite.defaults, cfg, resolve, simulate, compose)
         rows.append(row)
-        progress(f"{'PASS' if passed else 'FAIL'} {prompt.text!r}: {reason}")
+        progress(f"{'PASS' if row['pass'] else 'FAIL'} {prompt.text!r}: {row['reason']}")
     return summarize(rows, time.perf_counter() - started)
+
+
+def _run_prompt(
+    prompt: SuitePrompt,
+    defaults: SuiteDefaults,
+    cfg: TextBenchConfig,
+    resolve: Callable[[str], Program],
+    simulate: Callable[[Program], dict[str, Any]],
+    compose: Callable[[Program, int | None, bool], float | None],
+) -> dict[str, Any]:
+    row: dict[str, Any] = {
+        "text": prompt.text,
+        "refuse": prompt.refuse,
+        "carry_or_refuse": prompt.carry_or_refuse,
+        "tags": list(prompt.tags),
+    }
+    try:
+        program = resolve(prompt.text)
+    except PromptRefused as exc:
+        ok = prompt.refuse or prompt.carry_or_refuse
+        hint = "closest to" in str(exc)  # the encoder named what the words are nearest to
+        return row | {
+            "pass": ok,
+            "refused": True,
+            "encoder_hint": hint,
+            "reason": f"refused: {exc}" if ok else f"refused, but should run: {exc}",
+        }
+    row |= {"refused": False, "parts": len(program.clauses), "typed_clauses": program.typed_clauses}
+    if prompt.refuse:
+        return row | {"pass": False, "misread": True, "reason": f"planned {len(program.clauses)} clause(s), but should be refused"}
+    read_ok, why = read_check(prompt, program)
+    if not read_ok:
+        return row | {"pass": False, "misread": True, "reason": f"read as something else: {why}"}
+    result = simulate(program)
+    passed, reason, verdicts = judge(prompt, defaults, result)
+    expected = prompt.clauses
+    order = (
+        in_expected_order(result["clauses"], expected, tolerances(prompt, defaults), DETECTED_GESTURES)
+        if expected
+        else result["order_accuracy"] == 1.0
+    )
+    row |= {
+        "pass": passed,
+        "misread": False,
+        "reason": reason,
+        "clauses": len(program.clauses),
+        "clause_verdicts": verdicts,
+        "falls": result["falls"],
+        "total_displacement": result["total_displacement"],
+        "total_heading_change_deg": result["total_heading_change_deg"],
+        "gestures": [c["gestures"] for c in result["clauses"]],
+        "order_accuracy": 1.0 if order else 0.0,
+        "transition_score": result["transition_score"],
+        "run_seconds": result["run"]["run_seconds"],
+        "timed_out_clauses": sum(c["timed_out"] for c in result["clauses"]),
+    }
+    if cfg.kinematic and len(program.clauses) > 1:
+        row["transition_kinematic_blended"] = _rounded(compose(program, BLEND_FRAMES, True))
+        row["transition_kinematic_crossfade"] = _rounded(compose(program, BLEND_FRAMES, False))
+        row["transition_kinematic_naive"] = _rounded(compose(program, None, True))
+    return row
 
 
 def summarize(rows: list[dict[str, Any]], wall_seconds: float) -> dict[str, Any]:
@@ -169,19 +252,31 @@ def summarize(rows: list[dict[str, Any]], wall_seconds: float) -> dict[str, Any]
 
     ran = [r for r in rows if "clauses" in r]
     order = {n: [r["order_accuracy"] for r in ran if r["clauses"] == n] for n in (3, 4)}
-    joined = [r for r in ran if "transition_kinematic_blended" in r and r["transition_kinematic_blended"] is not None]
+    joined = [r for r in ran if r.get("transition_kinematic_blended") is not None]
+    tags = sorted({t for r in rows for t in r["tags"]})
+    parts = sum(r.get("parts", 0) for r in rows)
     return {
         "prompts": len(rows),
         "passed": sum(r["pass"] for r in rows),
         "success_rate": round(sum(r["pass"] for r in rows) / len(rows), 4) if rows else None,
+        "ran_as_something_else": sum(bool(r.get("misread")) for r in rows),
+        "refused_but_should_run": sum(r["refused"] and not (r["refuse"] or r["carry_or_refuse"]) for r in rows),
         "refusals_expected": sum(r["refuse"] for r in rows),
         "falls": sum(r.get("falls", 0) for r in rows),
         "order_accuracy_3_clauses": mean(order[3]),
         "order_accuracy_4_clauses": mean(order[4]),
         "prompts_3_clauses": len(order[3]),
         "prompts_4_clauses": len(order[4]),
+        "pass_rate_by_tag": {t: round(float(np.mean([r["pass"] for r in rows if t in r["tags"]])), 4) for t in tags},
+        # Every clause that runs is read by the lexicon and its handlers; the encoder only explains refusals (resolve.py).
+        "clauses_decided_by_lexicon": parts,
+        "clauses_decided_by_encoder": 0,
+        "refusals_explained_by_encoder": sum(bool(r.get("encoder_hint")) for r in rows),
         "transition_score_sim": mean([r["transition_score"] for r in ran if r["transition_score"] is not None]),
         "transition_score_blended": mean([r["transition_kinematic_blended"] for r in joined]),
+        "transition_score_crossfade": mean(
+            [r["transition_kinematic_crossfade"] for r in joined if r["transition_kinematic_crossfade"] is not None]
+        ),
         "transition_score_naive": mean([r["transition_kinematic_naive"] for r in joined if r["transition_kinematic_naive"] is not None]),
         "wall_seconds": round(wall_seconds, 1),
         "results": rows,

@@ -87,7 +87,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--seed", type=int, default=0)
     text.add_argument("--policy", default="fastsac")
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
-    text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-naive comparison on the composed plans")
+    text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-baselines comparison on the composed plans")
     text.add_argument("--no-text", action="store_true", help="leave the planner's text slot empty (default: each clause's text)")
     text.add_argument("--hardware", default=None, help="run each prompt through simulated hardware (sim-can, sim-dds): the estimate steers")
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
@@ -173,7 +173,7 @@ def _text(args: argparse.Namespace) -> int:
         cfg,
         planner.resolve,
         lambda program: planner.simulate(program, seed=args.seed, policy=args.policy, hardware=hardware),
-        lambda program, blend: planner.composed_transition(program, blend, args.seed),
+        lambda program, blend, continue_motion: planner.composed_transition(program, blend, args.seed, continue_motion),
         progress=lambda line: print(line, file=sys.stderr, flush=True),
     )
     report["hardware"] = args.hardware  # None: the simulator directly

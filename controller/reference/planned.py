@@ -71,15 +71,16 @@ class PlannedReference(ReferenceSource):
         self._segment_start: tuple[int, bool] | None = None  # a new segment asked for: (crossfade frames, with its context)
         self._fresh_context = False  # the plan being asked for starts from a standing pose, not the buffer (naive joins)
 
-    def start_segment(self, blend_frames: int | None) -> None:
+    def start_segment(self, blend_frames: int | None, continue_motion: bool = True) -> None:
         """Ask for a plan at once that starts a new segment (the next clause of a text plan).
 
         `blend_frames`: it continues the executed motion (the buffer's context) and is blended
-        into it over this many frames (Text2BFM-Compose's overlap). None: naive concatenation,
-        the baseline that blending is compared against: planned from a standing pose at the
-        same root, as if on its own, and spliced with no blend.
+        into it over this many frames (Text2BFM-Compose's overlap). `continue_motion` False: the
+        crossfade baseline, planned from a standing pose at the same root as if on its own, and
+        crossfaded over the same frames. None: naive concatenation, planned from a standing pose
+        and spliced with no blend.
         """
-        self._segment_start = (0, False) if blend_frames is None else (blend_frames, True)
+        self._segment_start = (0, False) if blend_frames is None else (blend_frames, continue_motion)
 
     def _request(self, context: FloatArray, splice_time: float) -> PlanRequest:
         if self._fresh_context:

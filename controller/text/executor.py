@@ -16,8 +16,9 @@ the gesture library):
   ended 5 cm short is made good by the next one: errors do not accumulate.
 - Composition: at each boundary the next clause's first plan is asked for at once, with
   the executed motion as its context, and blended into it over `blend_frames` frames
-  (Text2BFM-Compose's overlap). With `blend_frames=None` the clauses are concatenated
-  naively (planned from a standing pose, no blend): the baseline blending is judged against.
+  (Text2BFM-Compose's overlap). Two baselines it is judged against: `continue_motion=False`
+  plans the next clause from a standing pose and crossfades it over the same frames, and
+  `blend_frames=None` concatenates naively (from a standing pose, no blend).
 - The clause's text conditions the planner's text slot, when the planner was trained so.
 - Arms no gesture of the clause moves are held down (`hold_free_arms`): an instruction that
   names no arm gets no arm motion beyond what the walk needs.
@@ -73,6 +74,7 @@ def _clause_waypoints() -> WaypointConfig:
 @dataclass(frozen=True)
 class TextRunConfig:
     blend_frames: int | None = 8  # overlap of two clauses' plans (frames at 30 fps); None: naive concatenation
+    continue_motion: bool = True  # the next clause's plan continues the executed motion; False: the crossfade baseline
     timeout_factor: float = 1.5  # a clause may take this many times its estimate, plus the margin, before it is given up
     timeout_margin_s: float = 5.0
     hold_free_arms: bool = True  # arms no clause gesture moves stay down (see `SmartLocomotion.hold_free_arms`)
@@ -274,7 +276,7 @@ class TextReference(ReferenceSource):
         self.planned.follower = follower
         self.planned.locomotion.text_embedding = self.embed(clause.text) if self.embed is not None else None
         if index > 0:
-            self.planned.start_segment(self.cfg.blend_frames)
+            self.planned.start_segment(self.cfg.blend_frames, self.cfg.continue_motion)
         self._deadline = t + self.timeout_s(clause, record.intended_start, record.estimate.start_pose)
         self.records.append(record)
 

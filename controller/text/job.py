@@ -96,15 +96,16 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
 
 
 def composed_transition_score(
-    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None, policy: str = TextSimConfig.policy
-) -> float | None:
-    """The transition score of `program` composed on paper (an ideal robot ticked at `policy`'s rate): blended joins, or
-    naive ones with None."""
+    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None, policy: str = TextSimConfig.policy,
+    continue_motion: bool = True,
+) -> float | None:  # fmt: skip
+    """The transition score of `program` composed on paper (an ideal robot ticked at `policy`'s rate): blended joins, the
+    crossfade baseline (`continue_motion` False), or naive ones (`blend_frames` None)."""
     from controller.text.kinematic import run_kinematic  # noqa: PLC0415
     from controller.text.metrics import transition_score  # noqa: PLC0415
     from controller.text.report import reference_with_boundaries  # noqa: PLC0415
 
-    cfg = replace(TextRunConfig(), blend_frames=blend_frames)
+    cfg = replace(TextRunConfig(), blend_frames=blend_frames, continue_motion=continue_motion)
     reference = TextReference(program, PlannedReference(plan, seed=seed), cfg, embed=text_embedding)
     try:
         run_kinematic(reference, policy_rate_hz(policy), max_seconds=budget_seconds(program, reference.cfg))

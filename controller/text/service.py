@@ -73,12 +73,15 @@ class TextPlanner:
             cfg = replace(cfg, run=replace(cfg.run, blend_frames=None))
         return run_text_sim(program, cfg, self.encoder.embed, detect_gestures, self.text_embedding())
 
-    def composed_transition(self, program: Program, blend_frames: int | None, seed: int = 0) -> float | None:
-        """The transition score of the composed plan alone (an ideal robot: the root moves as commanded), blended or naive (None)."""
+    def composed_transition(self, program: Program, blend_frames: int | None, seed: int = 0, continue_motion: bool = True) -> float | None:
+        """The transition score of the composed plan alone (an ideal robot: the root moves as commanded): blended, the crossfade
+        baseline (`continue_motion` False) or naive (`blend_frames` None)."""
         from controller.planner.runtime import Planner  # noqa: PLC0415
         from controller.text.job import composed_transition_score  # noqa: PLC0415
 
         if self._planner is None:
             self._planner = Planner.load()
             self._planner.warm_up()
-        return composed_transition_score(program, self._planner.plan, blend_frames, seed, self.text_embedding())
+        return composed_transition_score(
+            program, self._planner.plan, blend_frames, seed, self.text_embedding(), continue_motion=continue_motion
+        )
