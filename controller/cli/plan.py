@@ -45,6 +45,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     plan.add_argument("--naive", action="store_true", help="join clauses without blending (the baseline of the transition score)")
     plan.add_argument("--progress", action="store_true", help="show a progress bar")
     plan.add_argument(
+        "--max-corrections", type=int, default=1, help="corrections per clause that ended off its goal or without its gesture (0: none)"
+    )
+    plan.add_argument(
         "--no-text", action="store_true", help="leave the planner's text slot empty (each clause's text conditions it by default)"
     )
 
@@ -81,15 +84,17 @@ def run(args: argparse.Namespace) -> int:
         return 0
     report = planner.simulate(program, seed=args.seed, policy=args.policy, video=args.video, report=args.report,
                               blend=not args.naive, progress=args.progress, hardware=hardware,
-                              status=on_robot and sys.stderr.isatty(), record=args.record)  # fmt: skip
+                              status=on_robot and sys.stderr.isatty(), record=args.record,
+                              max_corrections=args.max_corrections)  # fmt: skip
     for c in report["clauses"]:
         flags = " (timed out)" if c["timed_out"] else ""
+        flags += "".join(f" (corrected: {k['reason']})" for k in c["corrections"])
         print(
             f"{c['start_s']:6.2f}-{c['end_s']:6.2f} s  {c['text']!r}: {_moved(c['displacement'])}, "
             f"turned {c['heading_change_deg']:+.0f} deg, gestures {c['gestures'] or 'none'}{flags}"
         )
     keys = ("measured_by", "total_displacement", "total_displacement_estimate", "total_heading_change_deg",
-            "total_heading_change_deg_estimate", "order_accuracy", "transition_score", "falls")  # fmt: skip
+            "total_heading_change_deg_estimate", "order_accuracy", "transition_score", "corrections", "falls")  # fmt: skip
     print(json.dumps({k: report[k] for k in keys if k in report}))
     for key, path in (("video", args.video), ("report", args.report), ("recording", args.record)):
         if path is not None:

@@ -22,6 +22,13 @@ the gesture library):
 - The clause's text conditions the planner's text slot, when the planner was trained so.
 - Arms no gesture of the clause moves are held down (`hold_free_arms`): an instruction that
   names no arm gets no arm motion beyond what the walk needs.
+- Corrected on what was done: when a clause is over, what the robot did is compared, in the
+  controller's own view (never the simulator's truth), with what was asked: where it ended
+  against the clause's intended end pose, and the gestures a detector sees in its measured arm
+  motion against the clause's gestures. Outside `correct_position_m` / `correct_heading_deg`, or
+  with an asked gesture not seen, the clause goes on with a correction (a re-approach of the end
+  pose, the gestures held `GESTURE_REDO_S` more), at most `max_corrections` times. Each
+  correction, its reason and its times are in the clause's record.
 
 A clause ends when its follower has settled on the last target and its minimum duration
 has passed, or, failing that, after a timeout (reported). Everything measured per clause
@@ -49,7 +56,7 @@ from controller.reference.planned import PlannedReference
 from controller.reference.source import ReferenceSource
 from controller.reference.waypoints import Follower, WaypointConfig, WaypointFollower
 from controller.reference.window import ReferenceWindow
-from controller.text.program import Clause, Curve, Program, library_gesture
+from controller.text.program import DETECTED_GESTURES, Clause, Curve, Program, library_gesture
 from hw import g1, quat
 from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
@@ -59,6 +66,7 @@ Pose = tuple[float, float, float]  # x, y (m, world), heading (rad, unwrapped)
 # "walk forward half a meter and back, twice", four waypoints took 2-2.5 s each beyond path / speed.
 SETTLE_PER_WAYPOINT_S = 2.0
 YAW_RATE_AT_FINISH = 0.8  # rad/s: a curve's end pose is settled at the clause's default turning rate
+GESTURE_REDO_S = 3.0  # a gesture not seen in the clause is held on this much longer (a gesture alone lasts 3 s)
 
 
 def _clause_waypoints() -> WaypointConfig:
@@ -79,10 +87,20 @@ class TextRunConfig:
     timeout_margin_s: float = 5.0
     hold_free_arms: bool = True  # arms no clause gesture moves stay down (see `SmartLocomotion.hold_free_arms`)
     waypoints: WaypointConfig = field(default_factory=_clause_waypoints)
+    max_corrections: int = 1  # per clause; 0: none
+    # A clause that ended further than this from its intended end pose is corrected: twice the follower's
+    # tolerance (it settles within 0.08 m and 4 degrees), well inside a person's 0.35 m and 20 degrees.
+    correct_position_m: float = 0.15
+    correct_heading_deg: float = 10.0
 
     def __post_init__(self) -> None:
         if self.blend_frames is not None and self.blend_frames < 1:
             raise ConfigError(f"blend_frames must be at least 1 (or None for naive concatenation), got {self.blend_frames}")
+        if self.max_corrections < 0 or self.correct_position_m <= 0 or self.correct_heading_deg <= 0:
+            raise ConfigError(
+                f"max_corrections must be at least 0 and the correction tolerances positive, got {self.max_corrections}, "
+                f"{self.correct_position_m} m, {self.correct_heading_deg} degrees"
+            )
 
 
 @dataclass
@@ -132,6 +150,11 @@ class ClauseRecord:
     timed_out: bool = False
     frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick, in the judged view
     reference: list[FloatArray] = field(default_factory=list)  # the planned reference's qpos [36], one per tick
+    intended_end: Pose | None = None  # where the program meant this clause to end (the controller's view)
+    phase_start_s: float = 0.0  # when the clause, or its latest correction, began
+    phase_min_s: float = 0.0  # ... and how long that phase lasts at least
+    corrections: list[dict[str, Any]] = field(default_factory=list)  # reason, start_s, end_s of each
+    own_frames: list[FloatArray] = field(default_factory=list)  # measured qpos [36] in the controller's view: what it corrects by
 
     @property
     def judged(self) -> PoseTrack:
@@ -180,8 +203,10 @@ class TextReference(ReferenceSource):
         limits: CommandLimits | None = None,
         embed: Callable[[str], FloatArray] | None = None,  # clause text -> the planner's text embedding; None: no text
         truth: Callable[[], RobotState | None] | None = None,  # the simulator's truth at the tick (`Backend.truth`)
+        detect: Callable[[FloatArray, float], tuple[str, ...]] | None = None,  # measured qpos [T, 36], Hz -> gestures seen
     ) -> None:
         self.program = program
+        self.detect = detect
         self.truth = truth
         self.planned = planned
         self.cfg = cfg
@@ -230,13 +255,11 @@ class TextReference(ReferenceSource):
             truth = self._truth()
             self._measure(current, state, truth)
             if self._clause_over(current, state):
-                self._end(current, state, truth)
-                if current.index + 1 < len(self.program.clauses):
-                    self._begin(current.index + 1, state, truth)
+                reason = self._correction_needed(current, state)
+                if reason is not None:
+                    self._correct(current, state, reason)
                 else:
-                    self.finished_at = state.time - self._t0
-                    self.planned.follower = None
-                    self.planned.locomotion.text_embedding = None
+                    self._finish(current, state, truth)
         running = self.current
         if running is not None:  # every arm track of the clause (CoMA's body-part split)
             tracks = tuple(library_gesture(g) for g in running.clause.gestures)
@@ -246,6 +269,63 @@ class TextReference(ReferenceSource):
         if running is not None and window.plan is not None:
             running.reference.append(np.array(window.plan.qpos))
         return window
+
+    def _finish(self, record: ClauseRecord, state: RobotState, truth: RobotState | None) -> None:
+        """The clause is over (and corrected where it needed to be): the next one begins, or the program is done."""
+        if record.corrections and "end_s" not in record.corrections[-1]:
+            record.corrections[-1]["end_s"] = round(state.time - self._t0, 4)
+        self._end(record, state, truth)
+        if record.index + 1 < len(self.program.clauses):
+            self._begin(record.index + 1, state, truth)
+        else:
+            self.finished_at = state.time - self._t0
+            self.planned.follower = None
+            self.planned.locomotion.text_embedding = None
+
+    def _correction_needed(self, record: ClauseRecord, state: RobotState) -> str | None:
+        """Why the clause just over must be corrected (None: it did what was asked, or its corrections are used up)."""
+        cfg = self.cfg
+        if record.corrections:
+            record.corrections[-1]["end_s"] = round(state.time - self._t0, 4)
+        if len(record.corrections) >= cfg.max_corrections:
+            return None
+        problems = []
+        if record.intended_end is not None and state.has_base_position:
+            pose = _pose(state)
+            miss = math.hypot(pose[0] - record.intended_end[0], pose[1] - record.intended_end[1])
+            turn = math.degrees(abs(float(quat.wrap_angle(pose[2] - record.intended_end[2]))))
+            if miss > cfg.correct_position_m or turn > cfg.correct_heading_deg:
+                problems.append(f"ended {miss:.2f} m and {turn:.0f} degrees from its goal")
+        asked = set(record.clause.gestures) & set(DETECTED_GESTURES)
+        if self.detect is not None and asked and len(record.own_frames) > 1:
+            seconds = state.time - self._t0 - record.start_s
+            seen = set(self.detect(np.array(record.own_frames), (len(record.own_frames) - 1) / max(seconds, 1e-6)))
+            if asked - seen:
+                problems.append(f"gestures {sorted(asked - seen)} not seen")
+        return "; ".join(problems) or None
+
+    def _correct(self, record: ClauseRecord, state: RobotState, reason: str) -> None:
+        """Go on with the clause: re-approach its end pose where it is off, hold its gestures on where one was not seen."""
+        t = state.time - self._t0
+        record.corrections.append({"reason": reason, "start_s": round(t, 4), "after_timeout": record.timed_out})
+        record.phase_start_s = t
+        record.phase_min_s = GESTURE_REDO_S if "gestures" in reason else 0.0
+        follower: Follower | None = None
+        seconds = record.phase_min_s
+        if "from its goal" in reason and record.intended_end is not None:
+            x, y, h = record.intended_end
+            motion = record.clause.motion
+            speed, yaw_rate = (motion.speed_mps, getattr(motion, "yaw_rate", YAW_RATE_AT_FINISH)) if motion else (0.5, YAW_RATE_AT_FINISH)
+            follower = WaypointFollower(
+                [WorldWaypoint(x, y, math.degrees(h))], _with_rates(self.cfg.waypoints, speed, yaw_rate), self.limits
+            )
+            follower.start(state)
+            pose = _pose(state)
+            seconds += math.hypot(x - pose[0], y - pose[1]) / speed + abs(float(quat.wrap_angle(h - pose[2]))) / yaw_rate
+            seconds += SETTLE_PER_WAYPOINT_S
+        self.planned.follower = follower
+        record.timed_out = False
+        self._deadline = t + self.cfg.timeout_factor * seconds + self.cfg.timeout_margin_s
 
     def _truth(self) -> RobotState | None:
         return self.truth() if self.truth is not None else None
@@ -273,6 +353,8 @@ class TextReference(ReferenceSource):
             follower.start(state)
             end = clause.motion.end
             self._intended = from_frame(self._intended, end.forward_m, end.left_m, math.radians(end.heading_deg))
+        record.intended_end = self._intended
+        record.phase_start_s, record.phase_min_s = record.start_s, clause.min_duration_s
         self.planned.follower = follower
         self.planned.locomotion.text_embedding = self.embed(clause.text) if self.embed is not None else None
         if index > 0:
@@ -294,12 +376,18 @@ class TextReference(ReferenceSource):
         frame[g1.QPOS_ROOT_QUAT] = judged.base_quat
         frame[g1.QPOS_JOINTS] = judged.joint_pos
         record.frames.append(frame)
+        if truth is None:
+            record.own_frames.append(frame)
+        else:  # the controller corrects by what it measures itself
+            own = np.empty(g1.QPOS_SIZE)
+            own[g1.QPOS_ROOT_POS], own[g1.QPOS_ROOT_QUAT], own[g1.QPOS_JOINTS] = state.base_pos, state.base_quat, state.joint_pos
+            record.own_frames.append(own)
 
     def _clause_over(self, record: ClauseRecord, state: RobotState) -> bool:
         t = state.time - self._t0
         follower = self.planned.follower
         arrived = follower is None or follower.done
-        if arrived and t - record.start_s >= record.clause.min_duration_s - 1e-9:
+        if arrived and t - record.phase_start_s >= record.phase_min_s - 1e-9:
             return True
         if t >= self._deadline:
             record.timed_out = True
@@ -313,7 +401,10 @@ class TextReference(ReferenceSource):
             record.truth.end(truth)
 
     def report(self) -> dict[str, Any]:
-        return self.planned.report() | {"clauses_done": sum(r.end_s is not None for r in self.records)}
+        return self.planned.report() | {
+            "clauses_done": sum(r.end_s is not None for r in self.records),
+            "corrections": sum(len(r.corrections) for r in self.records),
+        }
 
     def close(self) -> None:
         self.planned.close()

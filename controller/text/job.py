@@ -71,7 +71,7 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     holder: list[TextReference] = []
 
     def wrap(planned: PlannedReference, limits: CommandLimits, truth: Callable[[], RobotState | None]) -> TextReference:
-        holder.append(TextReference(program, planned, cfg.run, limits, text_embedding, truth))
+        holder.append(TextReference(program, planned, cfg.run, limits, text_embedding, truth, detect))
         return holder[0]
 
     hooks = RunHooks(

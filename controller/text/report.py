@@ -46,6 +46,7 @@ def text_report(reference: TextReference, rate_hz: float, embed: Embed, detect: 
                 "goal": {"displacement": [round(goal[0], 3), round(goal[1], 3)], "heading_change_deg": round(goal[2], 1),
                          "gestures": list(r.clause.gestures)},
                 "timed_out": r.timed_out,
+                "corrections": r.corrections,
                 "motion_caption": captions[-1],
             }
         )  # fmt: skip
@@ -65,6 +66,7 @@ def text_report(reference: TextReference, rate_hz: float, embed: Embed, detect: 
             "order_accuracy": 1.0 if complete and in_order(assignment, len(texts)) else 0.0,
             "transition_score": None if score is None else round(score, 5),
             "blend_frames": reference.cfg.blend_frames,
+            "corrections": sum(len(r.corrections) for r in records),
         }
     )  # fmt: skip
 

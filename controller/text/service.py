@@ -60,7 +60,7 @@ class TextPlanner:
     def simulate(
         self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,
         blend: bool = True, progress: bool = False, hardware: BackendChoice | None = None, status: bool = False,
-        record: Path | None = None,
+        record: Path | None = None, max_corrections: int = 1,
     ) -> dict[str, Any]:  # fmt: skip
         """Run `program` on the simulated G1 (through `hardware` when given: its config as `choose_backend` loaded it, or on
         the real G1 it names): the text report, with the run's report under "run"."""
@@ -69,6 +69,7 @@ class TextPlanner:
         cfg = TextSimConfig(
             policy=policy, seed=seed, video=video, report=report, progress=progress, hardware=hardware, status=status, record=record
         )
+        cfg = replace(cfg, run=replace(cfg.run, max_corrections=max_corrections))
         if not blend:
             cfg = replace(cfg, run=replace(cfg.run, blend_frames=None))
         return run_text_sim(program, cfg, self.encoder.embed, detect_gestures, self.text_embedding())

@@ -92,3 +92,42 @@ def test_blend_frames_must_be_positive() -> None:
     with pytest.raises(ConfigError, match="blend_frames"):
         TextRunConfig(blend_frames=0)
     assert np.isfinite(TextRunConfig().timeout_factor)
+
+
+def test_a_clause_off_its_goal_is_corrected_at_most_as_often_as_configured(planner: Planner) -> None:
+    """An ideal robot settles within the follower's 8 cm; asked to be within 1 mm, every moving clause is corrected once."""
+    program = Program("walk forward a meter", (Clause("walk forward a meter", Motion((RelativeWaypoint(1.0, 0.0, 0.0),))),))
+    for corrections in (0, 1):
+        cfg = TextRunConfig(max_corrections=corrections, correct_position_m=0.001, correct_heading_deg=0.01)
+        reference = TextReference(program, PlannedReference(planner.plan), cfg)
+        run_kinematic(reference, policy_rate_hz("fastsac"), max_seconds=30.0)
+        reference.close()
+        (record,) = reference.records
+        assert len(record.corrections) == corrections and reference.finished_at is not None
+        for c in record.corrections:
+            assert "from its goal" in c["reason"] and c["start_s"] <= c["end_s"] == record.end_s
+
+
+def test_a_gesture_seen_in_the_measured_arms_needs_no_correction(planner: Planner) -> None:
+    from controller.text.gesture_detector import detect_gestures  # noqa: PLC0415
+
+    program = Program("wave with both hands", (Clause("wave with both hands", None, ("wave_both",), 3.0),))
+    reference = TextReference(program, PlannedReference(planner.plan), TextRunConfig(), detect=detect_gestures)
+    run_kinematic(reference, policy_rate_hz("fastsac"), max_seconds=20.0)
+    reference.close()
+    assert reference.records[0].corrections == [] and reference.report()["corrections"] == 0
+
+
+def test_a_gesture_too_short_to_be_seen_is_held_on_once(planner: Planner) -> None:
+    """Half a second of waving is under the detector's 0.9 s: the clause goes on with the wave for 3 s more."""
+    from controller.text.executor import GESTURE_REDO_S  # noqa: PLC0415
+    from controller.text.gesture_detector import detect_gestures  # noqa: PLC0415
+
+    program = Program("wave", (Clause("wave", None, ("wave_right",), 0.5),))
+    reference = TextReference(program, PlannedReference(planner.plan), TextRunConfig(), detect=detect_gestures)
+    run_kinematic(reference, policy_rate_hz("fastsac"), max_seconds=20.0)
+    reference.close()
+    (record,) = reference.records
+    (correction,) = record.corrections
+    assert "['wave_right'] not seen" in correction["reason"]
+    assert record.end_s is not None and record.end_s >= 0.5 + GESTURE_REDO_S - 0.05
