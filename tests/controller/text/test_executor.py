@@ -9,7 +9,16 @@ import pytest
 
 from controller.planner.runtime import Planner
 from controller.reference.planned import PlannedReference
-from controller.text.executor import SETTLE_PER_WAYPOINT_S, TextReference, TextRunConfig, estimate_seconds, from_frame, to_frame
+from controller.text.executor import (
+    GESTURE_REDO_S,
+    SETTLE_PER_WAYPOINT_S,
+    TextReference,
+    TextRunConfig,
+    estimate_seconds,
+    from_frame,
+    to_frame,
+)
+from controller.text.gesture_detector import detect_gestures
 from controller.text.kinematic import run_kinematic
 from controller.text.metrics import transition_score
 from controller.text.program import Clause, Motion, Program, RelativeWaypoint
@@ -109,7 +118,6 @@ def test_a_clause_off_its_goal_is_corrected_at_most_as_often_as_configured(plann
 
 
 def test_a_gesture_seen_in_the_measured_arms_needs_no_correction(planner: Planner) -> None:
-    from controller.text.gesture_detector import detect_gestures  # noqa: PLC0415
 
     program = Program("wave with both hands", (Clause("wave with both hands", None, ("wave_both",), 3.0),))
     reference = TextReference(program, PlannedReference(planner.plan), TextRunConfig(), detect=detect_gestures)
@@ -120,8 +128,6 @@ def test_a_gesture_seen_in_the_measured_arms_needs_no_correction(planner: Planne
 
 def test_a_gesture_too_short_to_be_seen_is_held_on_once(planner: Planner) -> None:
     """Half a second of waving is under the detector's 0.9 s: the clause goes on with the wave for 3 s more."""
-    from controller.text.executor import GESTURE_REDO_S  # noqa: PLC0415
-    from controller.text.gesture_detector import detect_gestures  # noqa: PLC0415
 
     program = Program("wave", (Clause("wave", None, ("wave_right",), 0.5),))
     reference = TextReference(program, PlannedReference(planner.plan), TextRunConfig(), detect=detect_gestures)
