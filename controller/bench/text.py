@@ -45,8 +45,10 @@ from controller.bench.text_judge import (
 )
 from controller.text.executor import TextRunConfig
 from controller.text.program import DETECTED_GESTURES, GESTURE_NAMES, Program, PromptRefused
+from hw import g1
 from hw.errors import ConfigError
 from hw.shipped import config_dir
+from hw.types import FloatArray
 from hw.yamlconfig import from_dict, load_yaml
 
 
@@ -158,6 +160,7 @@ class TextBenchConfig:
     policy: str = "fastsac"
     limit: int | None = None  # only the first N prompts (a quick look)
     kinematic: bool = True  # also compare blended joins with the crossfade and naive baselines on the composed plan alone
+    text_slot: bool = False  # also measure how much the clause text in the planner's text slot changes the composed plan
 
 
 BLEND_FRAMES = TextRunConfig().blend_frames
@@ -169,15 +172,19 @@ def run_text_bench(
     simulate: Callable[[Program], dict[str, Any]],
     compose: Callable[[Program, int | None, bool], float | None],
     progress: Callable[[str], None] = lambda line: None,
+    frames: Callable[[Program, int, bool], FloatArray] | None = None,
 ) -> dict[str, Any]:
     """Run the suite: `resolve` (text -> program or PromptRefused), `simulate` (program -> text report), `compose` (program,
-    blend frames or None, continue the motion -> kinematic transition score)."""
+    blend frames or None, continue the motion -> kinematic transition score), `frames` (program, seed, with text -> the
+    composed reference frames, for `text_slot`)."""
     suite = load_suite(cfg.suite)
     prompts = suite.prompts[: cfg.limit] if cfg.limit else suite.prompts
     rows = []
     started = time.perf_counter()
     for prompt in prompts:
         row = _run_prompt(prompt, suite.defaults, cfg, resolve, simulate, compose)
+        if cfg.text_slot and frames is not None and "clauses" in row:
+            row |= text_slot_effect(resolve(prompt.text), cfg.seed, frames)
         rows.append(row)
         progress(f"{'PASS' if row['pass'] else 'FAIL'} {prompt.text!r}: {row['reason']}")
     return summarize(rows, time.perf_counter() - started)
@@ -244,6 +251,27 @@ def _run_prompt(
     return row
 
 
+def text_slot_effect(program: Program, seed: int, frames: Callable[[Program, int, bool], FloatArray]) -> dict[str, float]:
+    """How far the clause text moves the composed plan (mean absolute joint change, rad; mean root distance, m), against
+    how far another seed moves it without text: the text slot is useful only where the first clearly exceeds the second."""
+    with_text, without, other_seed = frames(program, seed, True), frames(program, seed, False), frames(program, seed + 1, False)
+
+    def apart(a: FloatArray, b: FloatArray) -> tuple[float, float]:
+        n = min(len(a), len(b))
+        joints = float(np.mean(np.abs(a[:n, g1.QPOS_JOINTS] - b[:n, g1.QPOS_JOINTS])))
+        root = float(np.mean(np.linalg.norm(a[:n, :2] - b[:n, :2], axis=1)))
+        return joints, root
+
+    text_joints, text_root = apart(with_text, without)
+    seed_joints, seed_root = apart(other_seed, without)
+    return {
+        "text_slot_joint_change_rad": round(text_joints, 5),
+        "text_slot_root_change_m": round(text_root, 4),
+        "seed_joint_change_rad": round(seed_joints, 5),
+        "seed_root_change_m": round(seed_root, 4),
+    }
+
+
 def summarize(rows: list[dict[str, Any]], wall_seconds: float) -> dict[str, Any]:
     """The suite's figures from its rows."""
 
@@ -278,6 +306,10 @@ def summarize(rows: list[dict[str, Any]], wall_seconds: float) -> dict[str, Any]
             [r["transition_kinematic_crossfade"] for r in joined if r["transition_kinematic_crossfade"] is not None]
         ),
         "transition_score_naive": mean([r["transition_kinematic_naive"] for r in joined if r["transition_kinematic_naive"] is not None]),
+        "text_slot": {
+            k: mean([r[k] for r in rows if k in r])
+            for k in ("text_slot_joint_change_rad", "text_slot_root_change_m", "seed_joint_change_rad", "seed_root_change_m")
+        },
         "wall_seconds": round(wall_seconds, 1),
         "results": rows,
     }

@@ -89,6 +89,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
     text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-baselines comparison on the composed plans")
     text.add_argument("--no-text", action="store_true", help="leave the planner's text slot empty (default: each clause's text)")
+    text.add_argument(
+        "--text-slot", action="store_true", help="also measure how much each clause's text changes the composed plan (against a seed)"
+    )
     text.add_argument("--hardware", default=None, help="run each prompt through simulated hardware (sim-can, sim-dds): the estimate steers")
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
@@ -167,7 +170,11 @@ def _text(args: argparse.Namespace) -> int:
     hardware = choose_backend(args.hardware) if args.hardware is not None else None  # loaded once for every prompt's run
     if hardware is not None and not hardware.entry.simulated:
         raise ConfigError(f"bench text --hardware {args.hardware}: a real robot; the suite runs on simulated hardware (sim-can, sim-dds)")
-    cfg = TextBenchConfig(suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic)
+    if args.text_slot and args.no_text:
+        raise ConfigError("--text-slot compares plans with and without the text: drop --no-text")
+    cfg = TextBenchConfig(
+        suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic, text_slot=args.text_slot
+    )
     planner = TextPlanner.load(condition_text=not args.no_text)
     report = run_text_bench(
         cfg,
@@ -175,6 +182,7 @@ def _text(args: argparse.Namespace) -> int:
         lambda program: planner.simulate(program, seed=args.seed, policy=args.policy, hardware=hardware),
         lambda program, blend, continue_motion: planner.composed_transition(program, blend, args.seed, continue_motion),
         progress=lambda line: print(line, file=sys.stderr, flush=True),
+        frames=planner.composed_frames,
     )
     report["hardware"] = args.hardware  # None: the simulator directly
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))

@@ -95,14 +95,14 @@ def run_text_sim(program: Program, cfg: TextSimConfig, embed: Embed, detect: Det
     return out
 
 
-def composed_transition_score(
+def composed_frames(
     program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None, policy: str = TextSimConfig.policy,
     continue_motion: bool = True,
-) -> float | None:  # fmt: skip
-    """The transition score of `program` composed on paper (an ideal robot ticked at `policy`'s rate): blended joins, the
-    crossfade baseline (`continue_motion` False), or naive ones (`blend_frames` None)."""
+) -> tuple[Any, list[int]]:  # fmt: skip
+    """`program` composed on paper (an ideal robot ticked at `policy`'s rate): the reference frames [T, 36] and the tick where
+    each clause after the first begins. Blended joins, the crossfade baseline (`continue_motion` False), or naive ones
+    (`blend_frames` None)."""
     from controller.text.kinematic import run_kinematic  # noqa: PLC0415
-    from controller.text.metrics import transition_score  # noqa: PLC0415
     from controller.text.report import reference_with_boundaries  # noqa: PLC0415
 
     cfg = replace(TextRunConfig(), blend_frames=blend_frames, continue_motion=continue_motion)
@@ -111,5 +111,15 @@ def composed_transition_score(
         run_kinematic(reference, policy_rate_hz(policy), max_seconds=budget_seconds(program, reference.cfg))
     finally:
         reference.close()
-    frames, boundaries = reference_with_boundaries(reference)
+    return reference_with_boundaries(reference)
+
+
+def composed_transition_score(
+    program: Program, plan: Any, blend_frames: int | None, seed: int = 0, text_embedding: Any = None, policy: str = TextSimConfig.policy,
+    continue_motion: bool = True,
+) -> float | None:  # fmt: skip
+    """The transition score of `program` composed on paper (see `composed_frames`)."""
+    from controller.text.metrics import transition_score  # noqa: PLC0415
+
+    frames, boundaries = composed_frames(program, plan, blend_frames, seed, text_embedding, policy, continue_motion)
     return transition_score(frames, boundaries) if len(frames) else None

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from controller.text.encoder import SentenceEncoder, shared_encoder
+from controller.text.executor import TextRunConfig
 from controller.text.gesture_detector import detect_gestures
 from controller.text.program import Program
 from controller.text.resolve import describe_program, plan_program
@@ -86,3 +87,15 @@ class TextPlanner:
         return composed_transition_score(
             program, self._planner.plan, blend_frames, seed, self.text_embedding(), continue_motion=continue_motion
         )
+
+    def composed_frames(self, program: Program, seed: int = 0, text: bool = True) -> Any:
+        """The reference frames [T, 36] of `program` composed on paper with blended joins, with each clause's text in the
+        planner's text slot or with none (for measuring what the text slot changes)."""
+        from controller.planner.runtime import Planner  # noqa: PLC0415
+        from controller.text.job import composed_frames  # noqa: PLC0415
+
+        if self._planner is None:
+            self._planner = Planner.load()
+            self._planner.warm_up()
+        blend = TextRunConfig().blend_frames
+        return composed_frames(program, self._planner.plan, blend, seed, self.text_embedding() if text else None)[0]
