@@ -291,6 +291,7 @@ def summarize(rows: list[dict[str, Any]], wall_seconds: float) -> dict[str, Any]
         "refused_but_should_run": sum(r["refused"] and not (r["refuse"] or r["carry_or_refuse"]) for r in rows),
         "refusals_expected": sum(r["refuse"] for r in rows),
         "falls": sum(r.get("falls", 0) for r in rows),
+        "timed_out_clauses": sum(r.get("timed_out_clauses", 0) for r in rows),
         "order_accuracy_3_clauses": mean(order[3]),
         "order_accuracy_4_clauses": mean(order[4]),
         "prompts_3_clauses": len(order[3]),

