@@ -10,7 +10,7 @@ g1ctl bench buses [--report PATH] [--rates 250,333.333,400,500] [--seconds 10] [
 g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
-g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--no-text]
+g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--text] [--text-slot]
                  [--hardware sim-can]
 """
 
@@ -88,7 +88,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     text.add_argument("--policy", default="fastsac")
     text.add_argument("--limit", type=int, default=None, help="only the first N prompts")
     text.add_argument("--no-kinematic", action="store_true", help="skip the blended-against-baselines comparison on the composed plans")
-    text.add_argument("--no-text", action="store_true", help="leave the planner's text slot empty (default: each clause's text)")
+    text.add_argument("--text", action="store_true", help="put each clause's text in the planner's text slot (off by default)")
     text.add_argument(
         "--text-slot", action="store_true", help="also measure how much each clause's text changes the composed plan (against a seed)"
     )
@@ -170,12 +170,10 @@ def _text(args: argparse.Namespace) -> int:
     hardware = choose_backend(args.hardware) if args.hardware is not None else None  # loaded once for every prompt's run
     if hardware is not None and not hardware.entry.simulated:
         raise ConfigError(f"bench text --hardware {args.hardware}: a real robot; the suite runs on simulated hardware (sim-can, sim-dds)")
-    if args.text_slot and args.no_text:
-        raise ConfigError("--text-slot compares plans with and without the text: drop --no-text")
     cfg = TextBenchConfig(
         suite=args.suite, seed=args.seed, policy=args.policy, limit=args.limit, kinematic=not args.no_kinematic, text_slot=args.text_slot
     )
-    planner = TextPlanner.load(condition_text=not args.no_text)
+    planner = TextPlanner.load(condition_text=args.text)
     report = run_text_bench(
         cfg,
         planner.resolve,

@@ -2,7 +2,7 @@
 
 g1ctl plan "walk forward two meters, then turn left 90 degrees, then wave with your right hand"
            [--sim | --hardware sim-can|sim-mixed|sim-dds|g1-dds|PATH] [--video runs/plan.mp4] [--report runs/plan.json]
-           [--seed N] [--policy fastsac] [--naive] [--no-text] [--progress] [--record runs/plan.mcap]
+           [--seed N] [--policy fastsac] [--naive] [--text] [--progress] [--record runs/plan.mcap]
 
 Prints the decomposition (clauses, resolved quantities, gestures); with --sim runs it on the
 simulated G1 directly, with --hardware through that hardware (simulated buses, the simulated G1
@@ -48,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--max-corrections", type=int, default=1, help="corrections per clause that ended off its goal or without its gesture (0: none)"
     )
     plan.add_argument(
-        "--no-text", action="store_true", help="leave the planner's text slot empty (each clause's text conditions it by default)"
+        "--text", action="store_true", help="put each clause's text in the planner's text slot (off by default: see docs/text-planning.md)"
     )
 
 
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         use_headless_gl()  # before MuJoCo is imported
     from controller.text.service import TextPlanner  # noqa: PLC0415 - loads the sentence encoder
 
-    planner = TextPlanner.load(condition_text=not args.no_text)
+    planner = TextPlanner.load(condition_text=args.text)
     program = planner.resolve(args.prompt)
     print(planner.describe(program))
     if not runs:

@@ -7,11 +7,12 @@ and the composed plan's transition score on paper (`composed_transition`). The p
 text slot gets each clause's sentence embedding when the shipped planner was trained with
 text (`text_conditioned` in its spec) and the caller asks for it (`condition_text`).
 
-On by default. With the weights before the current ones it was off: the arms a prompt left
-free picked up gestures from the training captions ("turn around" raised the right arm) and
-`g1ctl bench text` passed 58 of 59 prompts against 59 without. With the current weights, and
-free arms held while a gesture plays, both pass 59 of 59 with order accuracy 1.0 (transition
-score of the simulated runs 0.180 with text, 0.214 without).
+Off by default (`--text` turns it on), since 2026-12-02. Measured with `g1ctl bench text --text-slot`:
+the clause text moves a composed plan about as much as another sampling seed does, and what it adds
+is what the prompt did not ask for: in "walk an arc ..., then walk straight ahead one metre" the
+planner raised the right arm for a second during the straight walk (the training captions' arm
+motion), a gesture the per-clause checks count as unasked; without the text, none. The figures are
+in docs/text-planning.md ("The text slot").
 """
 
 from __future__ import annotations
@@ -31,13 +32,13 @@ if TYPE_CHECKING:
 
 
 class TextPlanner:
-    def __init__(self, encoder: SentenceEncoder, condition_text: bool = True) -> None:
+    def __init__(self, encoder: SentenceEncoder, condition_text: bool = False) -> None:
         self.encoder = encoder
         self.condition_text = condition_text
         self._planner: Any = None
 
     @classmethod
-    def load(cls, condition_text: bool = True) -> TextPlanner:
+    def load(cls, condition_text: bool = False) -> TextPlanner:
         return cls(shared_encoder(), condition_text)
 
     def resolve(self, prompt: str) -> Program:
@@ -47,9 +48,10 @@ class TextPlanner:
     def describe(self, program: Program) -> str:
         return describe_program(program)
 
-    def text_embedding(self) -> Any:
-        """Clause text -> the planner's text conditioning; None unless asked for and the shipped planner was trained with text."""
-        if not self.condition_text:
+    def text_embedding(self, asked: bool | None = None) -> Any:
+        """Clause text -> the planner's text conditioning; None unless asked for (`asked`, default `condition_text`) and the
+        shipped planner was trained with text."""
+        if not (self.condition_text if asked is None else asked):
             return None
         import json  # noqa: PLC0415
 
@@ -98,4 +100,4 @@ class TextPlanner:
             self._planner = Planner.load()
             self._planner.warm_up()
         blend = TextRunConfig().blend_frames
-        return composed_frames(program, self._planner.plan, blend, seed, self.text_embedding() if text else None)[0]
+        return composed_frames(program, self._planner.plan, blend, seed, self.text_embedding(asked=text))[0]
