@@ -110,6 +110,14 @@ def test_text_bench_runs_a_suite(tmp_path: Path) -> None:
         "prompts:\n"
         "  - text: turn right 90 degrees and then walk forward half a meter\n"
         "    expect: {clauses: 2, forward_m: 0.0, left_m: -0.5, heading_deg: -90}\n"
+        "  - text: walk forward half a meter while waving with your left hand, then turn left\n"
+        "    tags: [tracks]\n"
+        "    clauses:\n"
+        "      - {forward_m: 0.5, gestures: [wave_left]}\n"
+        "      - {heading_deg: 90}\n"
+        "  - text: walk forward half a meter, then turn right\n"
+        "    carry_or_refuse: true\n"
+        "    clauses: [{forward_m: 0.5}, {heading_deg: 90}]\n"
         "  - text: please juggle three balls\n"
         "    refuse: true\n"
     )
@@ -117,9 +125,15 @@ def test_text_bench_runs_a_suite(tmp_path: Path) -> None:
     result = g1ctl("bench", "text", "--suite", str(suite), "--report", str(report_path))
     assert result.returncode == 0, result.stderr
     report = json.loads(report_path.read_text())
-    assert report["prompts"] == 2 and report["success_rate"] == 1.0, report["results"]
-    ran = report["results"][0]
-    assert ran["transition_kinematic_blended"] < ran["transition_kinematic_naive"]
+    assert report["prompts"] == 4 and report["passed"] == 3, report["results"]
+    first, tracks, misread, _ = report["results"]
+    assert first["pass"] and first["transition_kinematic_blended"] < first["transition_kinematic_naive"]
+    assert first["transition_kinematic_crossfade"] is not None
+    assert tracks["pass"] and [v["pass"] for v in tracks["clause_verdicts"]] == [True, True]
+    # turning right where the suite says left: read as something else, and not run
+    assert misread["misread"] and "read as something else" in misread["reason"] and "falls" not in misread
+    assert report["ran_as_something_else"] == 1 and report["clauses_decided_by_encoder"] == 0
+    assert report["pass_rate_by_tag"] == {"tracks": 1.0}
 
 
 def test_text_bench_names_a_bad_suite(tmp_path: Path) -> None:
