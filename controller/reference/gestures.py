@@ -141,13 +141,13 @@ class GestureLibrary:
         Once every gesture has blended out, one more keyframe puts the arms on the base pose
         (the plan holds it from there) and the rest of the plan is the planner's.
 
-        `hold_rest`: while gestures shape the arms, the arm joints none of them moves are held
-        on the base pose ("raise your right arm" leaves the left one down: see
-        `SmartLocomotion.hold_free_arms`).
+        `hold_rest`: the arm joints no gesture moves are held on the base pose over the whole
+        plan, with or without gestures ("raise your right arm" leaves the left one down, "turn
+        right" both: see `SmartLocomotion.hold_free_arms`).
         """
-        if not gestures:
+        if not gestures and not hold_rest:
             return ()
-        spacing = min(self.style(g.name).spacing_frames for g in gestures)
+        spacing = min((self.style(g.name).spacing_frames for g in gestures), default=self.cfg.spacing_frames)
         out = []
         for frame in reversed(range(frames - 1, 0, -spacing)):
             t = first_frame_time + frame / FPS
@@ -158,7 +158,7 @@ class GestureLibrary:
                 qpos = np.array(g1.standing_qpos())
                 qpos[g1.QPOS_JOINTS] = q
                 out.append(Keyframe(frame, qpos, joints=held, root=False, root_height=False))
-            if not any(g.alive(t, self.cfg.blend_s) for g in gestures):
+            if not hold_rest and not any(g.alive(t, self.cfg.blend_s) for g in gestures):
                 break
         return tuple(out)
 

@@ -51,10 +51,12 @@ class SmartLocomotion:
         self.library = GestureLibrary(cfg.gestures)
         self.gestures: tuple[Gesture, ...] = ()  # those in force (end inf) and those still blending out, by start
         self.text_embedding: FloatArray | None = None  # the planner's text conditioning (a text plan's clause), None: none
-        # While a gesture is in force, the arm joints it does not move stay on the base pose ("raise your right
-        # arm": the left one stays down). Off, the planner swings them as it likes: the shipped planner, half of
-        # whose training windows are dance capture, raised the left arm too on "raise your right arm" in a text
-        # plan. Not held without a gesture: arms held through a turn in place made its plans diverge.
+        # The arm joints no gesture moves stay on the base pose ("raise your right arm": the left one stays down;
+        # "turn right": both). Off, the planner swings them as it likes: the shipped planner, half of whose training
+        # windows are dance capture, raised the left arm too on "raise your right arm" in a text plan, and without
+        # any text raised both arms during "turn right" after a walk (2026-12-02, detected as raise_both). Until
+        # then they were held only while a gesture played: held through a turn in place, an earlier planner's
+        # plans diverged; the shipped one turned in 5.9 s, settled, where free arms timed out at 11 s.
         self.hold_free_arms = False
 
     @property

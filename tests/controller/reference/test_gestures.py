@@ -103,7 +103,10 @@ def test_no_gesture_no_keyframes_and_an_unknown_name_lists_the_valid_ones() -> N
 def test_holding_the_free_arms_keeps_the_arm_joints_the_gesture_does_not_move_on_the_base_pose() -> None:
     library = GestureLibrary()
     first = 3.0
-    assert library.keyframes([], first, 44, hold_rest=True) == ()  # no gesture: the arms are the planner's
+    assert library.keyframes([], first, 44) == ()  # no gesture, free arms: the arms are the planner's
+    rest = library.keyframes([], first, 44, hold_rest=True)  # held: on the base pose over the whole plan
+    assert [k.frame for k in rest] == list(range(43, 0, -4))[::-1]
+    assert all(np.array_equal(k.joints, ARMS) and np.allclose(k.qpos[g1.QPOS_JOINTS][ARMS], BASE[ARMS]) for k in rest)
     raised = library.keyframes([Gesture("raise_right", start=0.0)], first, 44, hold_rest=True)
     right = library.style("raise_right").arms
     assert [k.frame for k in raised] == list(range(43, 0, -4))[::-1]
