@@ -126,6 +126,7 @@ class ClauseRecord:
     truth: PoseTrack | None = None  # the simulator's truth over the same ticks; None: no simulator behind the robot
     end_s: float | None = None
     timed_out: bool = False
+    interrupted: bool = False  # ended early by a new instruction or a stop (`TextReference.replace_program`)
     frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick, in the judged view
     reference: list[FloatArray] = field(default_factory=list)  # the planned reference's qpos [36], one per tick
 
@@ -263,6 +264,37 @@ class TextReference(ReferenceSource):
             self.planned.start_segment(self.cfg.blend_frames)
         self._deadline = t + self.timeout_s(clause, record.intended_start, record.estimate.start_pose)
         self.records.append(record)
+
+    def replace_program(self, program: Program | None, state: RobotState) -> list[ClauseRecord]:
+        """Switch to `program` at once, from where the robot is: an instruction given while it runs (`text/live.py`).
+
+        The clause running ends, its record marked `interrupted`. The new program's first clause begins with its targets
+        placed from the robot's pose now (not where the program replaced meant to be), and its first plan is asked for at
+        once and blended into the executed motion, as at a clause boundary. None: nothing more runs (the plan stands where
+        the robot is). Returns the records of the program replaced; `records` then holds the new one's. A program that
+        walks, on a state with no base position, raises `ConfigError` with nothing changed. Times count from `start`, or,
+        on a reference that never started (made over a planned reference already running), on the state's own clock.
+        """
+        if program is not None:
+            _check_position(program, state)
+        truth = self._truth()
+        running = self.current
+        if running is not None:
+            running.interrupted = True
+            self._end(running, state, truth)
+        replaced, self.records = self.records, []
+        if program is None:
+            self.finished_at = state.time - self._t0
+            self.planned.follower = None
+            self.planned.locomotion.text_embedding = None
+            return replaced
+        self.program, self.finished_at = program, None
+        self.needs_base_position = any(clause.motion is not None for clause in program.clauses)
+        self.planned.locomotion.hold_free_arms = self.cfg.hold_free_arms
+        self._intended = _pose(state)
+        self._begin(0, state, truth)
+        self.planned.start_segment(self.cfg.blend_frames)
+        return replaced
 
     def timeout_s(self, clause: Clause, intended_start: Pose, pose: Pose) -> float:
         """How long the clause may run from `pose` before it is given up."""
