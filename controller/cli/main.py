@@ -7,7 +7,7 @@ Usage (each command group's module shows its own):
     g1ctl robot --dds             a simulated G1 in its own process on the robot's DDS topics (controller/cli/robot.py)
     g1ctl plan "PROMPT" [--sim]   a typed instruction planned into clauses, run on the simulated G1 (controller/cli/plan.py)
     g1ctl tell "INSTRUCTION" --to PATH   an instruction to a run taking them (g1ctl run --instructions PATH; controller/cli/tell.py)
-    g1ctl bench loop|hw|dds|recorder|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
+    g1ctl bench loop|hw|dds|recorder|inbetween|text|typed   benchmarks with JSON reports (controller/cli/bench.py)
     g1ctl eval --suite NAME       a robustness sweep, locally or on Ray (controller/cli/eval.py)
     g1ctl log info|plot|replay FILE   read a flight recording made with --record FILE.mcap (controller/cli/log.py)
     g1ctl dataset record|import|info   the planner's motion dataset (controller/cli/dataset.py)

@@ -128,11 +128,11 @@ def _check_instructions(channel: str | None, no_planner: bool, input_name: str) 
 
 def _run_taking_instructions(plan: RunPlan, channel: str | None) -> int:
     """The run with its live text reference: instructions from the keyboard's text line, and from `channel` (a socket
-    path, or - for standard input) when given. The sentence encoder is loaded before the run starts."""
+    path, or - for standard input) when given. The sentence encoder is loaded before the run starts, in the resolver's
+    process."""
     from controller.cli.sim import run_and_summarize  # noqa: PLC0415
     from controller.inputs.instructions import InstructionInbox  # noqa: PLC0415
     from controller.text.live import LiveInstructions  # noqa: PLC0415
-    from controller.text.service import TextPlanner  # noqa: PLC0415 - loads the sentence encoder
 
     inbox = InstructionInbox()
     with ExitStack() as stack:
@@ -146,8 +146,7 @@ def _run_taking_instructions(plan: RunPlan, channel: str | None) -> int:
             path = Path(channel)
             stack.enter_context(InstructionSocket(path, inbox))
             print(f'g1ctl run: instructions on {path} (g1ctl tell "wave" --to {path}); "stop" stands the robot', file=sys.stderr)
-        planner = TextPlanner.load()
-        live = LiveInstructions(inbox, planner.resolve, planner.text_embedding())
+        live = stack.enter_context(LiveInstructions(inbox))  # the text planner loaded in the resolver's process, before the run
         return run_and_summarize(plan, live.hooks)
 
 

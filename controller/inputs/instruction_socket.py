@@ -283,6 +283,11 @@ class InstructionSocket:
         self._thread.join(timeout=JOIN_TIMEOUT_S)
         if self._thread.is_alive():
             log.warning("the instruction socket's thread did not stop within %.1f s", JOIN_TIMEOUT_S)
+        else:  # the last replies (instructions cancelled as the run ended), once, without waiting
+            self._queue_replies()
+            for client in list(self._clients.values()):
+                with contextlib.suppress(OSError):
+                    client.sock.send(client.out)
         for fd in list(self._clients):
             self._drop_client(fd)
         self._selector.close()

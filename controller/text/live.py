@@ -3,9 +3,10 @@
 `LiveTextReference` is the reference source of a run that takes instructions. While none runs it
 passes the input device's velocity and gesture to the planned reference, as a run without text
 does. Instructions arrive in an `InstructionInbox` (the keyboard's text line, the local socket,
-standard input); `InstructionResolver` resolves them on a thread of its own (the prompt's rules
-and the sentence encoder, loaded before the run starts), so the control loop never waits for a
-resolution. On the next tick the control thread decides each one:
+standard input); a `ResolverProcess` resolves them in a process of its own (the prompt's rules
+and the sentence encoder, loaded and warmed up before the run starts) and embeds each clause's
+text for the planner's text slot there too, so the control loop never waits for the encoder nor
+shares its time with it. On the next tick the control thread decides each one:
 
 - accepted: the `TextReference` switches to its program at once (`replace_program`): the clause
   running ends, marked interrupted, and the new first clause starts from the robot's pose now,
@@ -31,8 +32,6 @@ from __future__ import annotations
 
 import logging
 import math
-import queue
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -49,68 +48,16 @@ from controller.reference.window import ReferenceWindow
 from controller.reports import percentiles_ms
 from controller.runtime.run_config import RunHooks
 from controller.text.executor import ClauseRecord, TextReference, TextRunConfig
-from controller.text.program import Program, PromptRefused
+from controller.text.program import Program
+from controller.text.resolver import Resolved, ResolverProcess
 from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
 
 log = logging.getLogger(__name__)
 
 SETTLE_S = 1.0  # once the instructions' channel has closed, the run ends this long after the last one is over
-RESOLVER_POLL_S = 0.1
-JOIN_TIMEOUT_S = 2.0
 DEFAULT_RUN = TextRunConfig()
 NOT_RUNNING = "the robot is not running (stopped, e-stopped or held): start it again, then send the instruction"
-
-
-@dataclass(frozen=True)
-class Resolved:
-    instruction: Instruction
-    program: Program | None
-    refusal: str | None  # why it cannot be planned (None: `program` is it)
-    seconds: float  # wall time the resolution took
-
-
-class InstructionResolver:
-    """Resolves the inbox's instructions in arrival order on its own thread; the control thread `take`s the results."""
-
-    def __init__(self, inbox: InstructionInbox, resolve: Callable[[str], Program]) -> None:
-        self.inbox = inbox
-        self._resolve = resolve
-        self._results: queue.SimpleQueue[Resolved] = queue.SimpleQueue()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="instruction-resolver", daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            instruction = self.inbox.next_pending(RESOLVER_POLL_S)
-            if instruction is None:
-                continue
-            start = time.perf_counter()
-            program, refusal = None, None
-            try:
-                program = self._resolve(instruction.text)
-            except PromptRefused as exc:
-                refusal = str(exc)
-            except Exception as exc:  # a resolver bug refuses this instruction, loudly; the robot goes on as it was
-                log.error("resolving instruction %d (%r) failed", instruction.seq, instruction.text, exc_info=exc)
-                refusal = f"the resolver failed on it ({type(exc).__name__}: {exc})"
-            self._results.put(Resolved(instruction, program, refusal, time.perf_counter() - start))
-
-    def take(self) -> list[Resolved]:
-        """The results ready now, in order; never waits."""
-        out = []
-        while True:
-            try:
-                out.append(self._results.get_nowait())
-            except queue.Empty:
-                return out
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=JOIN_TIMEOUT_S)
-        if self._thread.is_alive():
-            log.warning("the instruction resolver did not stop within %.1f s", JOIN_TIMEOUT_S)
 
 
 @dataclass
@@ -128,18 +75,19 @@ class LiveTextReference(ReferenceSource):
     needs_base_position = True  # plans are re-anchored on the measured root, instructions walk to positions
 
     def __init__(
-        self, planned: PlannedReference, inbox: InstructionInbox, resolve: Callable[[str], Program], cfg: TextRunConfig = DEFAULT_RUN,
-        limits: CommandLimits | None = None, embed: Callable[[str], FloatArray] | None = None,
+        self, planned: PlannedReference, resolver: ResolverProcess, cfg: TextRunConfig = DEFAULT_RUN, limits: CommandLimits | None = None,
         truth: Callable[[], RobotState | None] | None = None, settle_s: float = SETTLE_S,
     ) -> None:  # fmt: skip
+        """`resolver`: where the instructions of its inbox are resolved (it closes with the caller, not here)."""
         self.planned = planned
-        self.inbox = inbox
+        self.inbox = resolver.inbox
         self.cfg = cfg
         self.limits = limits
-        self.embed = embed
+        self.conditioned = resolver.conditioned
         self.truth = truth
         self.settle_s = settle_s
-        self.resolver = InstructionResolver(inbox, resolve)
+        self.resolver = resolver
+        self._embeddings: dict[str, FloatArray] = {}  # the running program's clause texts, embedded by the resolver
         self.text: TextReference | None = None  # made at the first accepted instruction
         self.latencies_s: list[float] = []  # arrival to first plan, one per accepted instruction that got one
         self.resolve_seconds: list[float] = []
@@ -215,11 +163,6 @@ class LiveTextReference(ReferenceSource):
         return self.planned.report() | {"instructions": block}
 
     def close(self) -> None:
-        """Stop the resolver; what was still waiting is cancelled (its sender told so)."""
-        self.resolver.close()
-        waiting = self.inbox.drain_pending() + [r.instruction for r in self.resolver.take()]
-        for instruction in waiting:
-            self.inbox.settle(instruction, "cancelled", "the run ended", "cancelled: the run ended")
         self.planned.close()
 
     # -- deciding --------------------------------------------------------------------------
@@ -234,7 +177,11 @@ class LiveTextReference(ReferenceSource):
         instruction = resolved.instruction
         self._decided += 1
         self.resolve_seconds.append(resolved.seconds)
-        instruction.details["resolve_ms"] = round(resolved.seconds * 1e3, 3)
+        instruction.details |= {
+            "resolve_ms": round(resolved.seconds * 1e3, 3),
+            "embed_ms": round(resolved.embed_seconds * 1e3, 3),
+            "queued_ms": round((time.perf_counter() - instruction.arrived) * 1e3, 3),  # arrival to this tick's decision
+        }
         if instruction.seq < self._last_stop:
             self.inbox.settle(instruction, "cancelled", "a stop came after it", "cancelled: a stop came after it")
             return
@@ -242,11 +189,13 @@ class LiveTextReference(ReferenceSource):
         program = resolved.program
         if refusal is None and program is not None:
             if self.text is None:
-                self.text = TextReference(program, self.planned, self.cfg, self.limits, self.embed, self.truth)
+                embed = self._embedding if self.conditioned else None
+                self.text = TextReference(program, self.planned, self.cfg, self.limits, embed, self.truth)
+            previous, self._embeddings = self._embeddings, resolved.embeddings
             try:
                 replaced = self.text.replace_program(program, state)
             except ConfigError as exc:  # it walks to positions, and this robot's state has none
-                refusal = str(exc)
+                self._embeddings, refusal = previous, str(exc)
             else:
                 self._begin(instruction, program, replaced, velocity, gesture)
                 return
@@ -280,6 +229,10 @@ class LiveTextReference(ReferenceSource):
         self._idle_since = self.now
         if self._first_plan is not None and self._first_plan.instruction is instruction:
             self._first_plan = None
+
+    def _embedding(self, text: str) -> FloatArray:
+        """A clause's text conditioning, as the resolver embedded it."""
+        return self._embeddings[text]
 
     def _device(self, velocity: VelocityCommand, gesture: str) -> tuple[VelocityCommand, str]:
         """The device's command, or standing while it still asks what it asked when an instruction or a stop took over."""
@@ -334,21 +287,26 @@ def latency_summary(seconds: list[float]) -> dict[str, float | int | None]:
 
 
 class LiveInstructions:
-    """What a run adds to take instructions: its `hooks` (the live reference over the planned one, the caption, the end
-    once a closed channel's instructions are over, the log lines), and that reference once the run has made it."""
+    """What a run adds to take instructions: the resolver's process (started, and its encoder loaded, here: before the run),
+    the `hooks` (the live reference over the planned one, the caption, the end once a closed channel's instructions are
+    over, the log lines), and that reference once the run has made it. Usable with `with`: `close` ends the resolver and
+    cancels what was still waiting, telling each sender."""
 
-    def __init__(
-        self, inbox: InstructionInbox, resolve: Callable[[str], Program], embed: Callable[[str], FloatArray] | None = None,
-        cfg: TextRunConfig = DEFAULT_RUN,
-    ) -> None:  # fmt: skip
+    def __init__(self, inbox: InstructionInbox, condition_text: bool = True, cfg: TextRunConfig = DEFAULT_RUN) -> None:
+        """`condition_text`: each clause's text conditions the planner, where the shipped planner was trained so."""
         self.inbox = inbox
         self.reference: LiveTextReference | None = None
-        self._resolve = resolve
-        self._embed = embed
+        self.resolver = ResolverProcess(inbox, condition_text)
         self._cfg = cfg
 
+    def __enter__(self) -> LiveInstructions:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
     def _wrap(self, planned: PlannedReference, limits: CommandLimits, truth: Callable[[], RobotState | None]) -> LiveTextReference:
-        self.reference = LiveTextReference(planned, self.inbox, self._resolve, self._cfg, limits, self._embed, truth)
+        self.reference = LiveTextReference(planned, self.resolver, self._cfg, limits, truth)
         return self.reference
 
     @property
@@ -360,3 +318,9 @@ class LiveInstructions:
             instructions=self.inbox,
             log=self.inbox.take_lines,
         )
+
+    def close(self) -> None:
+        self.resolver.close()
+        waiting = self.inbox.drain_pending() + [resolved.instruction for resolved in self.resolver.take()]
+        for instruction in waiting:
+            self.inbox.settle(instruction, "cancelled", "the run ended", "cancelled: the run ended")
