@@ -49,11 +49,11 @@ def decode_instruction(raw: bytes | str) -> str:
             raise BadInstruction("malformed", f"not UTF-8 text (byte {exc.start}): send instructions as UTF-8, one a line") from exc
     if "\ufffd" in raw:  # what a terminal's stray bytes decode to
         raise BadInstruction("malformed", "not UTF-8 text: send instructions as UTF-8, one a line")
-    control = next((i for i, c in enumerate(raw) if c != "\t" and unicodedata.category(c) == "Cc"), None)
-    if control is not None:
-        code = ord(raw[control])
-        raise BadInstruction("malformed", f"control character 0x{code:02x} at {control}: send plain text, one instruction a line")
     text = raw.strip()
+    control = next((i for i, c in enumerate(text) if c != "\t" and unicodedata.category(c) == "Cc"), None)
+    if control is not None:
+        code = ord(text[control])
+        raise BadInstruction("malformed", f"control character 0x{code:02x} at {control}: send plain text, one instruction a line")
     if not text:
         raise BadInstruction("empty", "empty instruction: say what the robot should do, e.g. 'walk forward 1 m'")
     if len(text) > MAX_INSTRUCTION_CHARS:
