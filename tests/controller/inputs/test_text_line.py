@@ -10,8 +10,7 @@ from controller.commands.velocity import CommandLimits
 from controller.inputs.instructions import InstructionInbox
 from controller.inputs.keyboard import KeyboardSource, KeyboardState, apply_key
 from controller.inputs.text_line import SHOWN_CHARS, edit_line, shown_line
-from tests.conftest import wait_for
-from tests.controller.inputs.test_keyboard import Terminal
+from tests.conftest import Terminal, wait_for
 
 LIMITS = CommandLimits(vx=(-0.5, 0.5))
 

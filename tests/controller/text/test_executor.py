@@ -18,7 +18,7 @@ from controller.text.report import reference_with_boundaries
 from controller.tracking.presets import policy_rate_hz
 from hw import quat
 from hw.errors import ConfigError
-from tests.controller.text.ideal_robot import IdealRobot
+from tests.conftest import IdealRobot
 
 PROGRAM = Program(
     "walk forward a meter, then turn left 90 degrees, then wave",

@@ -18,8 +18,7 @@ from controller.planner.runtime import Planner
 from controller.reference.planned import PlannedReference
 from controller.text.live import NOT_RUNNING, LiveTextReference
 from controller.text.resolver import ResolverProcess
-from tests.conftest import HANG_S
-from tests.controller.text.ideal_robot import IdealRobot
+from tests.conftest import HANG_S, IdealRobot
 
 
 @pytest.fixture(scope="module")
