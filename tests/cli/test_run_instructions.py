@@ -18,16 +18,22 @@ from controller.recording.reader import read_recording
 from tests.conftest import G1CTL, g1ctl, one_line_error, wait_for
 
 
-def test_what_a_run_cannot_take_is_refused_in_one_line(tmp_path: Path) -> None:
-    assert "drop --no-planner" in one_line_error(g1ctl("run", "--no-planner", "--instructions", "-", "--input", "scripted"))
-    assert "the keyboard reads too" in one_line_error(g1ctl("run", "--instructions", "-", "--input", "keyboard"))
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (("run", "--no-planner", "--instructions", "-", "--input", "scripted"), "drop --no-planner"),
+        (("run", "--instructions", "-", "--input", "keyboard"), "the keyboard reads too"),
+        (("run", "--input", "scripted", "--instructions", "{shared}/g1.sock"), "can be written by others"),
+        (("tell", "wave", "--to", "{tmp}/none.sock"), "no run listens on"),
+    ],
+)
+def test_what_a_run_cannot_take_is_refused_in_one_line(args: tuple[str, ...], says: str, tmp_path: Path) -> None:
     shared = tmp_path / "shared"
     shared.mkdir()
     shared.chmod(0o777)
-    error = one_line_error(g1ctl("run", "--input", "scripted", "--instructions", str(shared / "g1.sock")))
-    assert "can be written by others" in error and not (shared / "g1.sock").exists()
-    error = one_line_error(g1ctl("tell", "wave", "--to", str(tmp_path / "none.sock")))
-    assert "no run listens on" in error and "g1ctl run --instructions" in error
+    error = one_line_error(g1ctl(*(a.format(shared=shared, tmp=tmp_path) for a in args)))
+    assert says in error
+    assert not (shared / "g1.sock").exists()
 
 
 def tell(path: Path, text: str, timeout: float = 10.0) -> tuple[int, str]:
