@@ -158,7 +158,10 @@ class ResolverProcess:
         if not self._condition_text:
             command.append("--no-text")
         try:
-            process = subprocess.Popen(command, pass_fds=(theirs.fileno(),), env=os.environ | ONE_THREAD, stdin=subprocess.DEVNULL)
+            process = subprocess.Popen(
+                command, pass_fds=(theirs.fileno(),), env=os.environ | ONE_THREAD, stdin=subprocess.DEVNULL,
+                start_new_session=True,  # Ctrl-C in the terminal is the run's to handle; the run ends the child
+            )  # fmt: skip
         except OSError as exc:
             ours.close()
             raise ResolverError(f"the instruction resolver's process did not start: {exc}") from exc
