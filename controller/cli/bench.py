@@ -12,6 +12,7 @@ g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--len
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
 g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--text] [--text-slot]
                  [--hardware sim-can]
+g1ctl bench typed [--instructions 20] [--refused 2] [--seed 0] [--min-gap 0.5] [--max-gap 3.0] [--hardware sim-can] [--report PATH]
 """
 
 from __future__ import annotations
@@ -93,6 +94,17 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--text-slot", action="store_true", help="also measure how much each clause's text changes the composed plan (against a seed)"
     )
     text.add_argument("--hardware", default=None, help="run each prompt through simulated hardware (sim-can, sim-dds): the estimate steers")
+    typed = bench_sub.add_parser(
+        "typed", help="instructions sent through the local socket at random times to a wall-clock simulated run: latency, falls"
+    )
+    typed.add_argument("--instructions", type=int, default=20, help="how many the script sends")
+    typed.add_argument("--refused", type=int, default=2, help="how many of them the planner must refuse")
+    typed.add_argument("--seed", type=int, default=0, help="the script's texts and times, and the run's seed")
+    typed.add_argument("--min-gap", type=float, default=0.5, help="seconds between two sends, at least")
+    typed.add_argument("--max-gap", type=float, default=3.0, help="seconds between two sends, at most")
+    typed.add_argument("--policy", default="fastsac")
+    typed.add_argument("--hardware", default=None, help="through simulated hardware (sim-can, sim-mixed); default: the simulator")
+    typed.add_argument("--report", type=Path, default=None)
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
     caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
@@ -131,6 +143,8 @@ def run(args: argparse.Namespace) -> int:
         return _text(args)
     if args.bench_command == "caption":
         return _caption(args)
+    if args.bench_command == "typed":
+        return _typed(args)
     if args.bench_command == "estimator":
         return _estimator(args)
     if args.bench_command == "recorder":
@@ -186,6 +200,22 @@ def _text(args: argparse.Namespace) -> int:
     print(json.dumps({k: v for k, v in report.items() if k != "results"}, indent=2))
     _save(report, args.report)
     return 0
+
+
+def _typed(args: argparse.Namespace) -> int:
+    from controller.bench.typed import TypedBenchConfig, run_typed_bench  # noqa: PLC0415 - imports MuJoCo
+    from controller.runtime.backend_registry import choose_backend  # noqa: PLC0415
+
+    if args.hardware is not None and not choose_backend(args.hardware).entry.simulated:
+        raise ConfigError(f"bench typed --hardware {args.hardware}: a real robot; the bench runs on simulated hardware (sim-can)")
+    cfg = TypedBenchConfig(
+        instructions=args.instructions, refused=args.refused, seed=args.seed, min_gap_s=args.min_gap, max_gap_s=args.max_gap,
+        policy=args.policy, hardware=args.hardware, assets_dir=args.assets_dir,
+    )  # fmt: skip
+    report = run_typed_bench(cfg)
+    print(json.dumps({k: v for k, v in report.items() if k != "log"}, indent=2))
+    _save(report, args.report)
+    return 0 if report["targets_met"] else 1
 
 
 def _estimator(args: argparse.Namespace) -> int:

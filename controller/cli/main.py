@@ -6,7 +6,8 @@ Usage (each command group's module shows its own):
     g1ctl hw ...                  bench bring-up on real or simulated hardware (controller/cli/hw.py)
     g1ctl robot --dds             a simulated G1 in its own process on the robot's DDS topics (controller/cli/robot.py)
     g1ctl plan "PROMPT" [--sim]   a typed instruction planned into clauses, run on the simulated G1 (controller/cli/plan.py)
-    g1ctl bench loop|hw|dds|recorder|inbetween|text   benchmarks with JSON reports (controller/cli/bench.py)
+    g1ctl tell "INSTRUCTION" --to PATH   an instruction to a run taking them (g1ctl run --instructions PATH; controller/cli/tell.py)
+    g1ctl bench loop|hw|dds|recorder|inbetween|text|typed   benchmarks with JSON reports (controller/cli/bench.py)
     g1ctl eval --suite NAME       a robustness sweep, locally or on Ray (controller/cli/eval.py)
     g1ctl log info|plot|replay FILE   read a flight recording made with --record FILE.mcap (controller/cli/log.py)
     g1ctl dataset record|import|info   the planner's motion dataset (controller/cli/dataset.py)
@@ -29,7 +30,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from controller.cli import bench, catalog, dataset, log, plan, planner, robot, run, sim
+from controller.cli import bench, catalog, dataset, log, plan, planner, robot, run, sim, tell
 from controller.cli import eval as eval_commands
 from controller.cli import hw as hw_commands
 from controller.text.program import PromptRefused
@@ -40,6 +41,7 @@ from hw.errors import G1Error, HardwareFault, RunAborted
 COMMANDS: dict[str, ModuleType] = {
     "sim": sim, "run": run, "hw": hw_commands, "plan": plan, "bench": bench, "dataset": dataset,
     "train": planner, "viz": planner, "assets": catalog, "scenarios": catalog, "robot": robot, "eval": eval_commands, "log": log,
+    "tell": tell,
 }  # fmt: skip
 
 

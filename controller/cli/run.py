@@ -2,7 +2,7 @@
 
 g1ctl run [--input auto|keyboard|gamepad|scripted|unitree-remote] [--scenario walk_turn_stop] [--video runs/run.mp4]
           [--no-planner] [--tracker NAME] [--policy NAME] [--hardware sim-can|sim-dds|g1-dds|PATH] [--duration S] [--headless]
-          [--rt-priority 50] [--cpu N] [--record runs/run.mcap]
+          [--rt-priority 50] [--cpu N] [--record runs/run.mcap] [--instructions PATH|-]
 
 With a real robot's config (`simulated: false`) the run drives that robot (the same driver,
 `controller/runtime/driver.py`, no simulator): a G1 over DDS (a copy of g1-dds.yaml, the registry's
@@ -14,6 +14,14 @@ to the wall clock. Without one: headless. `--input auto` takes a gamepad when on
 in, else the keyboard when this is a terminal, else the scenario's scripted timeline. In a
 terminal one status line shows the mode, the command, the measured velocity and the plan
 latency. `--video` records either way (with the ghost).
+
+Instructions while it runs (`controller/text/live.py`): with the planner, the keyboard's / key
+types one on the status line; `--instructions PATH` also takes them on a local Unix socket
+(`g1ctl tell "wave" --to PATH`), `--instructions -` from standard input when it is not a terminal
+(the run then ends once the input has ended and its instructions are over). Each is planned and
+switched to at once from where the robot is; "stop" ends it and the robot stands; a refused one
+leaves the robot as it was and says why. With `--instructions` and scripted input the scenario
+is `stand` unless `--scenario` names one, and the run is held to the wall clock.
 """
 
 from __future__ import annotations
@@ -21,10 +29,16 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from contextlib import ExitStack
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from controller.inputs.registry import INPUTS
 from hw.dds.config import DdsHardwareConfig
+from hw.errors import ConfigError
+
+if TYPE_CHECKING:
+    from controller.runtime.run_plan import RunPlan
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -32,7 +46,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument(
         "--input", default="auto", choices=("auto", *INPUTS), help="auto: the robot's remote on a G1; gamepad, else keyboard, else scripted"
     )
-    run.add_argument("--scenario", default="walk_turn_stop", help="with scripted input: shipped scenario name or YAML path")
+    run.add_argument(
+        "--scenario",
+        default=None,
+        help="with scripted input: shipped scenario name or YAML path (default: walk_turn_stop; stand with --instructions)",
+    )
     run.add_argument("--video", type=Path, default=None, help="also record an .mp4 or .gif (with the planned ghost)")
     run.add_argument("--no-planner", action="store_true", help="track the command directly, without the planner")
     run.add_argument("--tracker", default=None, help="tracker by name (default: decoupled with the planner, else velocity)")
@@ -55,6 +73,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     run.add_argument("--rt-priority", type=int, default=0, help="on a real robot: SCHED_FIFO priority of the run, e.g. 50 (0: normal)")
     run.add_argument("--cpu", type=int, default=None, help="on a real robot: pin the run to this CPU")
     run.add_argument("--record", type=Path, default=None, help="record every tick into this MCAP file (g1ctl log reads it)")
+    run.add_argument(
+        "--instructions",
+        default=None,
+        metavar="PATH|-",
+        help="take typed instructions while running: on a local Unix socket at PATH (g1ctl tell sends them), or '-': standard input",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
     from controller.runtime.run_plan import resolve_run  # noqa: PLC0415
 
     choice = choose_backend(args.hardware)
+    channel = args.instructions
+    _check_instructions(channel, args.no_planner, args.input)
     on_robot = not choice.entry.simulated  # a real robot: no viewer
     viewer = not on_robot and not args.headless and bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if not on_robot and (args.video is not None or not viewer):
@@ -72,16 +98,56 @@ def run(args: argparse.Namespace) -> int:
         use_headless_gl()
     g1_remote = on_robot and isinstance(choice.hardware, DdsHardwareConfig)  # a real G1 has its remote; a robot on buses has none
     source = "unitree-remote" if g1_remote and args.input == "auto" else _choose_input(args.input)
+    scenario = args.scenario or ("stand" if channel is not None else "walk_turn_stop")
+    realtime = viewer or source != "scripted" or channel is not None  # a person drives, or sends instructions
     cfg = RunConfig(
-        scenario=args.scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
-        seed=args.seed, input=source, video=args.video, report=args.report, realtime=viewer or source != "scripted", viewer=viewer,
+        scenario=scenario, policy=args.policy, tracker=args.tracker, planner=not args.no_planner, duration=args.duration,
+        seed=args.seed, input=source, video=args.video, report=args.report, realtime=realtime, viewer=viewer,
         assets_dir=args.assets_dir, hardware=args.hardware, status=sys.stderr.isatty(), rt_priority=args.rt_priority, cpu=args.cpu,
         estimator=args.estimator, estimator_config=args.estimator_config, record=args.record,
     )  # fmt: skip
     plan = resolve_run(cfg, choice)
     if source != "scripted":
         print(f"g1ctl run: {source} input, {'viewer' if viewer else 'headless'}; Ctrl-C ends the run", file=sys.stderr)
-    return run_and_summarize(plan)
+    if channel is None and (args.no_planner or source != "keyboard"):
+        return run_and_summarize(plan)
+    return _run_taking_instructions(plan, channel)
+
+
+def _check_instructions(channel: str | None, no_planner: bool, input_name: str) -> None:
+    """One line for instructions this run cannot take."""
+    if channel is None:
+        return
+    if no_planner:
+        raise ConfigError("--instructions: instructions are planned whole-body motion; drop --no-planner")
+    if channel == "-" and input_name == "keyboard":
+        raise ConfigError("--instructions - reads standard input, which the keyboard reads too: use --instructions PATH, or type with /")
+    if channel == "-" and sys.stdin.isatty():
+        raise ConfigError("--instructions -: standard input is a terminal; pipe instructions in, or type them with the keyboard's / key")
+
+
+def _run_taking_instructions(plan: RunPlan, channel: str | None) -> int:
+    """The run with its live text reference: instructions from the keyboard's text line, and from `channel` (a socket
+    path, or - for standard input) when given. The sentence encoder is loaded before the run starts, in the resolver's
+    process."""
+    from controller.cli.sim import run_and_summarize  # noqa: PLC0415
+    from controller.inputs.instructions import InstructionInbox  # noqa: PLC0415
+    from controller.text.live import LiveInstructions  # noqa: PLC0415
+
+    inbox = InstructionInbox()
+    with ExitStack() as stack:
+        if channel == "-":
+            from controller.inputs.instruction_stream import StreamInstructions  # noqa: PLC0415
+
+            stack.enter_context(StreamInstructions(sys.stdin.fileno(), inbox, sys.stderr))
+        elif channel is not None:
+            from controller.inputs.instruction_socket import InstructionSocket  # noqa: PLC0415
+
+            path = Path(channel)
+            stack.enter_context(InstructionSocket(path, inbox))
+            print(f'g1ctl run: instructions on {path} (g1ctl tell "wave" --to {path}); "stop" stands the robot', file=sys.stderr)
+        live = stack.enter_context(LiveInstructions(inbox))  # the text planner loaded in the resolver's process, before the run
+        return run_and_summarize(plan, live.hooks)
 
 
 def _choose_input(choice: str) -> str:

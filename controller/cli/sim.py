@@ -18,6 +18,7 @@ from controller.inputs.registry import INPUTS
 from hw.errors import ConfigError
 
 if TYPE_CHECKING:
+    from controller.runtime.run_config import RunHooks
     from controller.runtime.run_plan import RunPlan
 
 
@@ -86,15 +87,19 @@ def run(args: argparse.Namespace) -> int:
     return run_and_summarize(resolve_run(cfg, choice))
 
 
-def run_and_summarize(plan: RunPlan) -> int:
-    """Run, print the summary and where the outputs are; exit status 1 when the run ended damped by a fault."""
+def run_and_summarize(plan: RunPlan, hooks: RunHooks | None = None) -> int:
+    """Run (with a job's `hooks`: instructions given while it runs), print the summary and where the outputs are; exit
+    status 1 when the run ended damped by a fault."""
     from controller.runtime.driver import execute  # noqa: PLC0415
 
-    report = execute(plan)
+    report = execute(plan, hooks)
     summary_keys = ("run_seconds", "real_time_factor", "falls", "velocity_error_mean", "yaw_rate_error_mean", "policy_step_ms", "overruns")
     print(json.dumps({k: report[k] for k in summary_keys if k in report}))
     if "plan_latency_ms" in report:
         print(json.dumps({k: report[k] for k in ("plan_latency_ms", "replans", "late_plans", "planner_failures") if k in report}))
+    if "instructions" in report:
+        said = ("received", "accepted", "refused", "cancelled", "stops", "dropped_messages", "first_plan_latency_s")
+        print(json.dumps({"instructions": {k: report["instructions"][k] for k in said}}))
     for key in ("video", "picture", "plot"):
         if key in report:
             print(f"{key}: {report[key]}")

@@ -1,6 +1,10 @@
 """Terminal keyboard driving: W/S forward/back, A/D left/right, Q/E turn, space zero.
 
 Enter = start, X = stop (zero and stand), Esc or K = emergency stop (damping).
+With an instruction inbox (`g1ctl run` with the planner), / or T opens a text line on the
+status line (`text_line.edit_line`): keys type into it and Enter sends it to the inbox. While
+typing, letters are text (K types a k: "walk" needs it) and Esc is the e-stop; Ctrl-C still
+ends the run (the terminal's interrupt stays on).
 Key handling is the pure `apply_key`; `KeyboardSource` reads raw keys from a TTY. A
 closed terminal makes the keyboard not alive (the run loop then commands zero and damps);
 a read that fails otherwise is logged and counted (`read_errors`), and after a few in a
@@ -9,6 +13,7 @@ row the reader gives up.
 
 from __future__ import annotations
 
+import codecs
 import errno
 import logging
 import os
@@ -16,11 +21,14 @@ import select
 import sys
 import termios
 import threading
+import time
 import tty
 from dataclasses import dataclass, field, replace
 
 from controller.commands.velocity import CommandLimits, VelocityCommand
 from controller.inputs.base import Buttons, CommandSample, CommandSource
+from controller.inputs.instructions import InstructionInbox
+from controller.inputs.text_line import OPEN_KEYS, edit_line
 from hw.errors import InputDeviceError
 
 log = logging.getLogger(__name__)
@@ -30,7 +38,9 @@ MAX_CONSECUTIVE_READ_ERRORS = 3
 JOIN_TIMEOUT_S = 1.0
 
 HELP = "keys: W/S fwd/back  A/D left/right  Q/E turn  space zero  Enter start  X stop  Esc/K e-stop  1 wave 2 raise 3 point (again: end)"
+TEXT_HELP = "  / or T type an instruction (Enter sends it; while typing, Esc is the e-stop and letters are text)"
 GESTURE_KEYS = {"1": "wave", "2": "raise_both", "3": "point"}  # a terminal sends no key release: a second press ends it
+ESTOP_KEYS = ("\x1b", "k")
 
 
 @dataclass(frozen=True)
@@ -38,12 +48,24 @@ class KeyboardState:
     velocity: VelocityCommand = field(default_factory=VelocityCommand)
     buttons: Buttons = field(default_factory=Buttons)
     gesture: str = ""
+    line: str | None = None  # the instruction being typed (None: the text line is closed)
+    sent: str | None = None  # the instruction Enter just sent (the reader hands it on and clears it)
 
 
-def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float = 0.1) -> KeyboardState:
-    """The state after one key press; unknown keys change nothing. Buttons latch until the next key."""
+def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float = 0.1, text: bool = False) -> KeyboardState:
+    """The state after one key press; unknown keys change nothing. Buttons latch until the next key.
+
+    `text`: instructions can be typed (/ or T opens the text line); while it is open, Esc still e-stops and every other
+    key edits the line."""
+    if state.line is not None:
+        if key == ESTOP_KEYS[0]:
+            return KeyboardState(buttons=Buttons(estop=True))
+        line, sent = edit_line(state.line, key)
+        return replace(state, line=line, sent=sent)
     v = state.velocity
     k = key.lower()
+    if text and k in OPEN_KEYS:
+        return replace(state, line="")
     if k in GESTURE_KEYS:
         return replace(state, gesture="" if state.gesture == GESTURE_KEYS[k] else GESTURE_KEYS[k])
     deltas = {"w": (step, 0, 0), "s": (-step, 0, 0), "a": (0, step, 0), "d": (0, -step, 0), "q": (0, 0, step), "e": (0, 0, -step)}
@@ -57,21 +79,26 @@ def apply_key(state: KeyboardState, key: str, limits: CommandLimits, step: float
         return replace(state, buttons=Buttons(start=True))
     if k == "x":
         return KeyboardState(buttons=Buttons(stop=True))
-    if k in ("\x1b", "k"):
+    if k in ESTOP_KEYS:
         return KeyboardState(buttons=Buttons(estop=True))
     return state
 
 
 class KeyboardSource(CommandSource):
     """Reads keys from the controlling terminal (or `stream`, a TTY) in a background thread,
-    joined on `close()`, which also restores the terminal's mode."""
+    joined on `close()`, which also restores the terminal's mode. With `instructions`, the text line
+    is open to typing: what it shows goes to `instructions.typing`, what Enter sends to `instructions`."""
 
     _needs_close = True
 
-    def __init__(self, limits: CommandLimits, step: float = 0.1, stream: object | None = None) -> None:
+    def __init__(
+        self, limits: CommandLimits, step: float = 0.1, stream: object | None = None, instructions: InstructionInbox | None = None
+    ) -> None:
         self._fd = _tty_fd(stream or sys.stdin)
         self._limits = limits
         self._step = step
+        self._instructions = instructions
+        self._decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")  # typed text may be more than one byte a character
         self._state = KeyboardState()
         self._lock = threading.Lock()
         self.read_errors = 0  # failed reads other than a closed terminal, each logged
@@ -89,11 +116,13 @@ class KeyboardSource(CommandSource):
                 if not ready:
                     continue
                 data = os.read(self._fd, 1)
+                arrived = time.perf_counter()
                 if not data:
                     log.warning("the terminal closed: no more keys, commanding zero")
                     return
-                with self._lock:
-                    self._state = apply_key(self._state, data.decode(errors="ignore"), self._limits, self._step)
+                key = self._decoder.decode(data)
+                if key:
+                    self._press(key, arrived)
             except OSError as exc:
                 if exc.errno == errno.EIO:  # the terminal hung up
                     log.warning("the terminal closed (%s): no more keys, commanding zero", exc)
@@ -105,6 +134,16 @@ class KeyboardSource(CommandSource):
                 failures = 0
         if failures:
             log.error("keyboard reader gives up after %d failed reads in a row: commanding zero", failures)
+
+    def _press(self, key: str, arrived: float) -> None:
+        inbox = self._instructions
+        with self._lock:
+            state = apply_key(self._state, key, self._limits, self._step, text=inbox is not None)
+            sent, self._state = state.sent, replace(state, sent=None)
+        if inbox is not None:
+            inbox.typing = state.line
+            if sent is not None:
+                inbox.submit(sent, "keyboard", arrived=arrived)
 
     def _read_failed(self, exc: BaseException, failures: int) -> int:
         self.read_errors += 1

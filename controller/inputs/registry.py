@@ -11,6 +11,7 @@ from hw.dds.session import DdsConfig
 from hw.errors import ConfigError
 
 if TYPE_CHECKING:
+    from controller.inputs.instructions import InstructionInbox
     from controller.inputs.scripted import Scenario
 
 INPUTS = ("scripted", "keyboard", "gamepad", "unitree-remote")
@@ -27,10 +28,12 @@ def check_input(name: str, remote: DdsConfig | None = None) -> None:
 
 
 def open_input(
-    name: str, limits: CommandLimits, scenario: Scenario | None, duration: float, seed: int, remote: DdsConfig | None = None
-) -> CommandSource:
+    name: str, limits: CommandLimits, scenario: Scenario | None, duration: float, seed: int, remote: DdsConfig | None = None,
+    instructions: InstructionInbox | None = None,
+) -> CommandSource:  # fmt: skip
     """The command source of a run: a scenario's timeline (`scenario`, `duration`, `seed`), the keyboard, a gamepad,
-    or the G1's own remote (read where the robot's `LowState_`s come: `remote`, its DDS domain and interface)."""
+    or the G1's own remote (read where the robot's `LowState_`s come: `remote`, its DDS domain and interface).
+    `instructions`: the run takes typed instructions; the keyboard's text line sends them there."""
     check_input(name, remote)
     if name == "scripted":
         from controller.inputs.scripted import ScriptedSource, timeline  # noqa: PLC0415
@@ -39,10 +42,10 @@ def open_input(
             raise ConfigError("--input scripted plays a scenario: give --scenario NAME")
         return ScriptedSource(timeline(scenario, duration, limits, seed), limits)
     if name == "keyboard":
-        from controller.inputs.keyboard import HELP, KeyboardSource  # noqa: PLC0415 - termios: a terminal only
+        from controller.inputs.keyboard import HELP, TEXT_HELP, KeyboardSource  # noqa: PLC0415 - termios: a terminal only
 
-        print(HELP, file=sys.stderr)
-        return KeyboardSource(limits)
+        print(HELP + (TEXT_HELP if instructions is not None else ""), file=sys.stderr)
+        return KeyboardSource(limits, instructions=instructions)
     if name == "unitree-remote":
         from controller.inputs.unitree_remote import UnitreeRemoteSource  # noqa: PLC0415 - cyclonedds: the g1 extra
 

@@ -117,8 +117,9 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
         load_compiled()  # the estimator's compiled step, before a robot that runs on its own is started (seconds on a first run)
     side = plan.backend.builder()(plan, assets, stack)
     backend = side.backend
+    instructions = hooks.instructions if hooks is not None else None
     source = stack.enter_context(
-        open_input(plan.input, tracker.command_limits, plan.scenario, plan.duration or 0.0, plan.seed, side.remote_dds)
+        open_input(plan.input, tracker.command_limits, plan.scenario, plan.duration or 0.0, plan.seed, side.remote_dds, instructions)
     )
     # Simulated time moves as the loop sleeps; a robot that runs on its own moves on the wall clock as its backend waits.
     clock = (RealtimeSimulationClock if plan.clock == "simulated-realtime" else SimulationClock)(backend.now, backend.advance_to)
@@ -174,7 +175,9 @@ def _reference(
         return planned
     # A job judges by the simulator's truth where one stands behind the robot (the DDS G1's mirror too), else by nothing.
     truth = side.world.read if side.world is not None else side.backend.truth
-    return hooks.wrap_reference(planned, limits, truth)
+    wrapped = hooks.wrap_reference(planned, limits, truth)
+    stack.callback(wrapped.close)
+    return wrapped
 
 
 def _world(side: BuiltBackend) -> SimRobot:
@@ -188,6 +191,7 @@ def drive(run: BuiltRun) -> Outcome:
     session = run.session
     caption = run.hooks.caption if run.hooks is not None else None
     done = run.hooks.done if run.hooks is not None else None
+    said = run.hooks.log if run.hooks is not None else None
     interrupted, error = False, None
     wall_start = time.perf_counter()
     try:
@@ -195,6 +199,8 @@ def drive(run: BuiltRun) -> Outcome:
         for tick in run.loop.run(run.plan.duration):
             going_on = session.tick()
             _show(run, caption() if caption is not None else None)
+            if said is not None:
+                _note(session, said())
             if tick % 10 == 9:
                 run.bar.update(10)
             if not going_on or (done is not None and done()):
@@ -218,6 +224,15 @@ def _show(run: BuiltRun, caption: str | None) -> None:
         _sync_viewer(run.viewer, run.ghost, ghost)
     if run.status is not None:
         run.status.update(run.session, caption or "")
+
+
+def _note(session: Session, lines: list[str]) -> None:
+    """A job's lines (instructions accepted, refused) into the flight recorder's log, when the run records."""
+    if lines and session.recorder is not None:
+        from controller.recording.recorder import INFO  # noqa: PLC0415 - the recorder is loaded when recording
+
+        for line in lines:
+            session.recorder.note("instructions", line, INFO)
 
 
 def _sync_viewer(viewer: Any, ghost: Any, qpos: Any) -> None:

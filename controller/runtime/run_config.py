@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from controller.commands.velocity import CommandLimits
+    from controller.inputs.instructions import InstructionInbox
     from controller.reference.planned import PlannedReference
     from controller.reference.source import ReferenceSource
     from hw.types import RobotState
@@ -60,13 +61,17 @@ class RunConfig:
 class RunHooks:
     """What a job built on a run adds (the text planner): its reference source over the planned one, a caption, an early end.
 
-    `wrap_reference(planned, limits, truth)` returns the source the session ticks; `truth()` is the
-    simulator's ground truth at the tick, also where the controller reads the simulator directly
-    (None: no simulator behind the robot, a real one). `caption()` is written
-    on each video frame and on the status line; `done()` ends the run before its duration. The
-    driver takes the same hooks on every backend.
+    `wrap_reference(planned, limits, truth)` returns the source the session ticks (closed with the
+    run); `truth()` is the simulator's ground truth at the tick, also where the controller reads the
+    simulator directly (None: no simulator behind the robot, a real one). `caption()` is written
+    on each video frame and on the status line; `done()` ends the run before its duration.
+    `instructions`: where the keyboard's text line sends what is typed (instructions given while
+    the robot runs, `text/live.py`); `log()`: lines said since the last call, written to the
+    flight recorder's log with `--record`. The driver takes the same hooks on every backend.
     """
 
     wrap_reference: Callable[[PlannedReference, CommandLimits, Callable[[], RobotState | None]], ReferenceSource]
     caption: Callable[[], str] | None = None
     done: Callable[[], bool] | None = None
+    instructions: InstructionInbox | None = None
+    log: Callable[[], list[str]] | None = None

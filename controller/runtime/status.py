@@ -20,13 +20,15 @@ class StatusLine:
         self.refresh_s = refresh_s
         self._next = 0.0
         self._width = 0
+        self._caption = ""
 
     def update(self, session: Session, caption: str = "") -> None:
-        """Refresh the line (at most every `refresh_s`); `caption`: what a job is doing now (the text plan's clause), at its end."""
+        """Refresh the line (at most every `refresh_s`, and at once when the caption changed: a key typed into the text
+        line); `caption`: what a job is doing now (the text plan's clause, an instruction being typed), at its end."""
         now = time.monotonic()
-        if now < self._next:
+        if now < self._next and caption == self._caption:
             return
-        self._next = now + self.refresh_s
+        self._next, self._caption = now + self.refresh_s, caption
         self._write(" | ".join(part for part in (format_status(session), caption) if part))
 
     def close(self) -> None:

@@ -67,6 +67,7 @@ Pose = tuple[float, float, float]  # x, y (m, world), heading (rad, unwrapped)
 SETTLE_PER_WAYPOINT_S = 2.0
 YAW_RATE_AT_FINISH = 0.8  # rad/s: a curve's end pose is settled at the clause's default turning rate
 GESTURE_REDO_S = 3.0  # a gesture not seen in the clause is held on this much longer (a gesture alone lasts 3 s)
+DETECT_FRAMES = 500  # a clause's gestures are looked for in at most its last 500 measured frames (10 s at 50 Hz)
 
 
 def _clause_waypoints() -> WaypointConfig:
@@ -148,6 +149,7 @@ class ClauseRecord:
     truth: PoseTrack | None = None  # the simulator's truth over the same ticks; None: no simulator behind the robot
     end_s: float | None = None
     timed_out: bool = False
+    interrupted: bool = False  # ended early by a new instruction or a stop (`TextReference.replace_program`)
     frames: list[FloatArray] = field(default_factory=list)  # executed qpos [36], one per tick, in the judged view
     reference: list[FloatArray] = field(default_factory=list)  # the planned reference's qpos [36], one per tick
     intended_end: Pose | None = None  # where the program meant this clause to end (the controller's view)
@@ -298,8 +300,11 @@ class TextReference(ReferenceSource):
                 problems.append(f"ended {miss:.2f} m and {turn:.0f} degrees from its goal")
         asked = set(record.clause.gestures) & set(DETECTED_GESTURES)
         if self.detect is not None and asked and len(record.own_frames) > 1:
-            seconds = state.time - self._t0 - record.start_s
-            seen = set(self.detect(np.array(record.own_frames), (len(record.own_frames) - 1) / max(seconds, 1e-6)))
+            # A clause's gestures are in force to its end: its last frames show them, and the detector's cost (about
+            # 7 ms for 500 frames) stays bounded on a control thread however long the clause was.
+            frames = record.own_frames[-DETECT_FRAMES:]
+            seconds = (state.time - self._t0 - record.start_s) * len(frames) / len(record.own_frames)
+            seen = set(self.detect(np.array(frames), (len(frames) - 1) / max(seconds, 1e-6)))
             if asked - seen:
                 problems.append(f"gestures {sorted(asked - seen)} not seen")
         return "; ".join(problems) or None
@@ -361,6 +366,39 @@ class TextReference(ReferenceSource):
             self.planned.start_segment(self.cfg.blend_frames, self.cfg.continue_motion)
         self._deadline = t + self.timeout_s(clause, record.intended_start, record.estimate.start_pose)
         self.records.append(record)
+
+    def replace_program(self, program: Program | None, state: RobotState) -> list[ClauseRecord]:
+        """Switch to `program` at once, from where the robot is: an instruction given while it runs (`text/live.py`).
+
+        The clause running ends, its record marked `interrupted`. The new program's first clause begins with its targets
+        placed from the robot's pose now (not where the program replaced meant to be), and its first plan is asked for at
+        once and blended into the executed motion, as at a clause boundary. None: nothing more runs (the plan stands where
+        the robot is). Returns the records of the program replaced; `records` then holds the new one's. A program that
+        walks, on a state with no base position, raises `ConfigError` with nothing changed. Times count from `start`, or,
+        on a reference that never started (made over a planned reference already running), on the state's own clock.
+        """
+        if program is not None:
+            _check_position(program, state)
+        truth = self._truth()
+        running = self.current
+        if running is not None:
+            running.interrupted = True
+            if running.corrections and "end_s" not in running.corrections[-1]:
+                running.corrections[-1]["end_s"] = round(state.time - self._t0, 4)
+            self._end(running, state, truth)
+        replaced, self.records = self.records, []
+        if program is None:
+            self.finished_at = state.time - self._t0
+            self.planned.follower = None
+            self.planned.locomotion.text_embedding = None
+            return replaced
+        self.program, self.finished_at = program, None
+        self.needs_base_position = any(clause.motion is not None for clause in program.clauses)
+        self.planned.locomotion.hold_free_arms = self.cfg.hold_free_arms
+        self._intended = _pose(state)
+        self._begin(0, state, truth)
+        self.planned.start_segment(self.cfg.blend_frames, self.cfg.continue_motion)
+        return replaced
 
     def timeout_s(self, clause: Clause, intended_start: Pose, pose: Pose) -> float:
         """How long the clause may run from `pose` before it is given up."""

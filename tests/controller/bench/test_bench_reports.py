@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from pathlib import Path
 
@@ -11,6 +12,8 @@ from controller.bench.bus_robot import run_bus_robot_bench
 from controller.bench.hw import run_hw_bench
 from controller.bench.loop import run_loop_bench
 from controller.bench.recorder import run_recorder_bench
+from controller.bench.typed import ACCEPTED_POOL, REFUSED_POOL, TypedBenchConfig, run_typed_bench, schedule
+from hw.errors import ConfigError
 
 
 def test_loop_bench_reports_both_loops() -> None:
@@ -62,3 +65,26 @@ def test_dds_bench_reports_cycle_and_both_raw_round_trips(sim_dds_config: Callab
     counters, robot = report["counters"], report["robot_process"]
     assert counters["states_received"] >= report["cycles"] and counters["crc_errors"] == 0
     assert robot["exit_code"] == 0 and robot["commands"] >= report["cycles"] and robot["crc_errors"] == 0
+
+
+def test_typed_bench_script_is_seeded_within_its_gaps_with_its_refusals() -> None:
+    cfg = TypedBenchConfig(instructions=12, refused=3, seed=4, min_gap_s=0.5, max_gap_s=2.0)
+    sends = schedule(cfg)
+    assert sends == schedule(cfg) and sends != schedule(TypedBenchConfig(instructions=12, refused=3, seed=5))
+    assert sum(s.refusal_expected for s in sends) == 3
+    assert all((s.text in REFUSED_POOL) == s.refusal_expected and (s.text in ACCEPTED_POOL) != s.refusal_expected for s in sends)
+    gaps = [b.at_s - a.at_s for a, b in itertools.pairwise(sends)]
+    assert all(0.5 - 1e-3 <= gap <= 2.0 + 1e-3 for gap in gaps)
+    with pytest.raises(ConfigError, match="--refused"):
+        TypedBenchConfig(instructions=2, refused=3)
+
+
+@pytest.mark.slow
+def test_typed_bench_reports_the_latency_of_each_accepted_instruction() -> None:
+    report = run_typed_bench(TypedBenchConfig(instructions=3, refused=1, seed=5, min_gap_s=0.5, max_gap_s=1.0))
+    assert report["instructions_sent"] == 3 and report["sender_error"] is None
+    assert (report["accepted"], report["refused"], report["refused_unexpected"]) == (2, 1, [])
+    latency = report["first_plan_latency_s"]
+    assert latency["n"] == 2 and 0 < latency["p50"] <= latency["p95"] <= latency["max"]
+    assert report["targets_met"] == (latency["p95"] <= 0.3 and report["falls"] == 0)
+    assert len(report["machine"]["load_average_before"]) == 3 and report["real_time_factor"] is not None

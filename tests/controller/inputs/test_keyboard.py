@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import logging
-import os
 import termios
 from collections.abc import Iterator
 
@@ -14,7 +13,7 @@ from controller.commands.velocity import CommandLimits
 from controller.inputs import keyboard
 from controller.inputs.keyboard import MAX_CONSECUTIVE_READ_ERRORS, KeyboardSource, KeyboardState, apply_key
 from hw.errors import InputDeviceError
-from tests.conftest import wait_for
+from tests.conftest import Terminal, wait_for
 
 LIMITS = CommandLimits(vx=(-0.5, 0.5))
 
@@ -43,28 +42,6 @@ def test_buttons() -> None:
 def test_keyboard_without_terminal_is_clear_error() -> None:
     with pytest.raises(InputDeviceError, match="interactive terminal"):
         KeyboardSource(LIMITS, stream=io.StringIO())
-
-
-class Terminal:
-    """A pseudo-terminal: the source reads its slave side, the test types on the master side."""
-
-    def __init__(self) -> None:
-        self.master, self.slave = os.openpty()
-
-    def fileno(self) -> int:
-        return self.slave
-
-    def type(self, keys: str) -> None:
-        os.write(self.master, keys.encode())
-
-    def hang_up(self) -> None:
-        os.close(self.master)
-        self.master = -1
-
-    def close(self) -> None:
-        for fd in (self.master, self.slave):
-            if fd >= 0:
-                os.close(fd)
 
 
 @pytest.fixture

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -24,6 +25,9 @@ from controller.text.metrics import transition_score
 from controller.text.program import Clause, Motion, Program, RelativeWaypoint
 from controller.text.report import reference_with_boundaries
 from controller.tracking.presets import policy_rate_hz
+from hw import quat
+from hw.errors import ConfigError
+from tests.conftest import IdealRobot
 
 PROGRAM = Program(
     "walk forward a meter, then turn left 90 degrees, then wave",
@@ -137,3 +141,46 @@ def test_a_gesture_too_short_to_be_seen_is_held_on_once(planner: Planner) -> Non
     (correction,) = record.corrections
     assert "['wave_right'] not seen" in correction["reason"]
     assert record.end_s is not None and record.end_s >= 0.5 + GESTURE_REDO_S - 0.05
+
+
+def test_a_program_replaced_while_it_runs_starts_from_where_the_robot_is(planner: Planner) -> None:
+    """An instruction given mid-walk: the walk ends interrupted, the turn is placed from the robot's pose now (not from
+    where the walk meant to end) and its first plan is asked for on the next tick, blended."""
+    planned = PlannedReference(planner.plan)
+    reference = TextReference(PROGRAM, planned, TextRunConfig())
+    robot = IdealRobot(reference, planned)
+    robot.run(2.0)
+    walked = float(robot.state.base_pos[0])
+    assert 0.2 < walked < 0.9 and reference.current is not None and reference.current.index == 0
+    turn = Program("turn right 45 degrees", (Clause("turn right 45 degrees", Motion((RelativeWaypoint(0.0, 0.0, -45.0),))),))
+    requests = planned.scheduler.counters.requests
+    replaced = reference.replace_program(turn, robot.state)
+    assert [r.clause.text for r in replaced] == ["walk forward a meter"] and replaced[0].interrupted and replaced[0].end_s is not None
+    (record,) = reference.records
+    assert record.clause is turn.clauses[0] and not record.interrupted
+    assert record.intended_start == pytest.approx((walked, float(robot.state.base_pos[1]), quat.heading(robot.state.base_quat)))
+    robot.tick()
+    assert planned.scheduler.counters.requests == requests + 1  # asked for at once, with the segment's blend
+    assert robot.until(lambda: reference.finished_at is not None, 20.0)
+    assert math.degrees(record.estimate.heading_change) == pytest.approx(-45.0, abs=6.0)
+    assert float(robot.state.base_pos[0]) == pytest.approx(walked, abs=0.1)  # it did not go on to the walk's end
+    assert reference.caption == "done"
+    # None: what runs ends, nothing follows
+    reference.replace_program(PROGRAM, robot.state)
+    robot.run(0.5)
+    (walk,) = reference.replace_program(None, robot.state)
+    assert walk.interrupted and reference.current is None and planned.follower is None and reference.finished_at is not None
+    reference.close()
+
+
+def test_a_program_that_walks_is_refused_without_a_base_position_and_changes_nothing(planner: Planner) -> None:
+    planned = PlannedReference(planner.plan)
+    reference = TextReference(PROGRAM, planned, TextRunConfig())
+    robot = IdealRobot(reference, planned)
+    robot.run(0.5)
+    records = list(reference.records)
+    blind = dataclasses.replace(robot.state, base_pos=np.zeros(3), has_base_position=False)
+    with pytest.raises(ConfigError, match="no base position estimate"):
+        reference.replace_program(PROGRAM, blind)
+    assert reference.records == records and reference.current is not None and not reference.current.interrupted
+    reference.close()
