@@ -190,6 +190,11 @@ def _kind(piece: Sequence[Lexeme]) -> str:
     return "action"
 
 
+def _amount(piece: Sequence[Lexeme]) -> bool:
+    """The piece states how far or how much to turn ("then 2 m"): after "then" that is a clause of its own."""
+    return any(x.cat is Cat.QUANTITY and x.kind in ("distance", "angle") for x in piece)
+
+
 def _strip_leading(piece: list[Lexeme]) -> list[Lexeme]:
     while piece and piece[0].cat in (Cat.FILLER, Cat.ORDINAL, Cat.PUNCT, Cat.AND, Cat.SEQ):
         piece = piece[1:]
@@ -261,6 +266,9 @@ def split_clauses(lexemes: Sequence[Lexeme]) -> list[list[Lexeme]]:
         simultaneous_end = any(x.cat is Cat.SIM and x.text in ("at the same time", "simultaneously") for x in piece[-1:])
         if clauses and delimiter == "and" and simultaneous_end:
             clauses[-1] += [Lexeme(Cat.SIM, "while"), *piece[:-1]]  # "walk forward and wave at the same time"
+        elif clauses and kind == "modifier" and delimiter in ("then", "sentence") and _amount(piece):
+            verb = next((x for x in clauses[-1] if x.cat in (Cat.VERB, Cat.LIGHT)), None)
+            clauses.append(([verb] if verb is not None else []) + piece)  # "walk 1 m, then 2 m": another walk
         elif clauses and kind == "modifier":
             clauses[-1] += piece
         elif clauses and kind == "direction" and delimiter == "and":

@@ -117,7 +117,7 @@ PHRASE_VERBS: dict[str, str] = {
     "come back": "return", "get back": "return", "head back": "return", "go home": "return",
     "hold still": "stand", "keep still": "stand", "stand still": "stand", "stay still": "stand", "don't move": "stand",
     "do not move": "stand", "hold on": "stand", "stay put": "stand", "stay there": "stand", "stay where you are": "stand",
-    "remain still": "stand", "take a break": "stand", "about face": "turn", "u turn": "turn",
+    "remain still": "stand", "take a break": "stand",
     "follow a": "walk", "follow an": "walk", "follow the": "walk", "do it again": "repeat", "do that again": "repeat",
     "do this again": "repeat", "do the same": "repeat",
     "do the same thing": "repeat", "one more time": "repeat", "repeat that": "repeat", "repeat it": "repeat",
@@ -165,7 +165,7 @@ ANGLES: dict[str, str] = {
     "half a turn": "180", "half rotation": "180", "half a rotation": "180", "half spin": "180", "full turn": "360",
     "full rotation": "360", "complete turn": "360", "complete rotation": "360", "whole turn": "360", "full spin": "360",
     "all the way around": "360", "all the way round": "360", "around": "around", "round": "around",
-    "the other way": "180", "the opposite way": "180", "the other direction": "180", "the opposite direction": "180",
+    "about face": "180", "u turn": "180", "uturn": "180", "the other way": "180", "the opposite way": "180", "the other direction": "180", "the opposite direction": "180",
 }  # fmt: skip
 SPEEDS: dict[str, str] = {
     **_tagged("slow slowly carefully gently cautiously leisurely gradually steadily", "slow"),

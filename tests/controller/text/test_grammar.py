@@ -61,6 +61,7 @@ def _clauses(prompt: str) -> list[str]:
         ("walk forward 1 m and to the left", ["walk forward 1 m and to the left"]),
         ("walk forward 1 m and back, twice", ["walk forward 1 m and back 2 times"]),
         ("turn right, then left", ["turn right", "turn left"]),
+        ("walk 1 m, then 2 m", ["walk 1 m", "walk 2 m"]),
         ("slowly, walk forward", ["walk forward slowly"]),
         ("walk forward while waving", ["walk forward while waving"]),
         ("walk forward waving your left hand", ["walk forward waving your left hand"]),

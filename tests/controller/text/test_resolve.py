@@ -70,6 +70,7 @@ def _ends(prompt: str) -> list[tuple[float, float, float]]:
         ("spin around", [(0.0, 0.0, 360.0)]),
         ("turn right 45", [(0.0, 0.0, -45.0)]),
         ("do a 180", [(0.0, 0.0, 180.0)]),
+        ("make a u-turn", [(0.0, 0.0, 180.0)]),
         ("make a quarter turn clockwise", [(0.0, 0.0, -90.0)]),
         ("wait 3 seconds", [(0.0, 0.0, 0.0)]),
     ],
