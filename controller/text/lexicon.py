@@ -165,7 +165,8 @@ ANGLES: dict[str, str] = {
     "half a turn": "180", "half rotation": "180", "half a rotation": "180", "half spin": "180", "full turn": "360",
     "full rotation": "360", "complete turn": "360", "complete rotation": "360", "whole turn": "360", "full spin": "360",
     "all the way around": "360", "all the way round": "360", "around": "around", "round": "around",
-    "about face": "180", "u turn": "180", "uturn": "180", "the other way": "180", "the opposite way": "180", "the other direction": "180", "the opposite direction": "180",
+    "about face": "180", "u turn": "180", "uturn": "180", "the other way": "180", "the opposite way": "180",
+    "the other direction": "180", "the opposite direction": "180",
 }  # fmt: skip
 SPEEDS: dict[str, str] = {
     **_tagged("slow slowly carefully gently cautiously leisurely gradually steadily", "slow"),
