@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.text.program import DETECTED_GESTURES, Program, PromptRefused
+from controller.text.program import GESTURE_NAMES, Program, PromptRefused
 from hw.errors import ConfigError
 from hw.shipped import config_dir
 from hw.yamlconfig import from_dict, load_yaml
@@ -40,9 +40,9 @@ class Expectation:
     gestures: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        unknown = [g for g in self.gestures if g not in DETECTED_GESTURES]
+        unknown = [g for g in self.gestures if g not in GESTURE_NAMES]
         if unknown:
-            raise ConfigError(f"expected gestures {unknown} cannot be detected; use {', '.join(DETECTED_GESTURES)}")
+            raise ConfigError(f"expected gestures {unknown} cannot be detected; use {', '.join(GESTURE_NAMES)}")
 
 
 @dataclass(frozen=True)
