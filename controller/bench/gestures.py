@@ -15,8 +15,10 @@ Two kinds of labelled executed motion, both from the simulated G1 (`--data` take
 A sample's detected names are compared with those it asks for: per gesture name, recall (asked and
 detected) and precision (detected and asked); per label (the asked names joined by "+", or "none"),
 the share of samples whose detected set is exactly the asked one. A name detected but not asked is
-a false positive, whatever else was asked. Train and test are told apart by seed: record each with
-its own seed and pass each folder on its own.
+a false positive, whatever else was asked. The labels say what was asked, not what the robot did: a
+clause the robot got wrong counts against the detector (the `wrong` list names each sample to look
+at). Train and test are told apart by seed: record each with its own seed and pass each folder on
+its own (every clip of a dataset counts, whatever its split).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ Each for 0.8 s or more (a wave 0.9 s):
 - it is raised where the palm is over 15 cm above the shoulder and the arm neither waves nor is held
   out ahead; an arm's raise (wave) that joins a raise (wave) of both arms is part of it;
 - the arms are crossed where each palm is at or past the midline (within 4 cm of it) with the elbow by
-  the side (within 8 cm of the shoulder); the hands are on the hips where both elbows are out (over
+  the side (within 8 cm of the shoulder), neither arm held out ahead; the hands are on the hips where both elbows are out (over
   11 cm) and bent (under 105 deg) with the palms over 15 cm under the shoulders.
 `DetectorConfig` says how each threshold was chosen.
 
@@ -384,7 +384,7 @@ def gesture_flags(qpos: FloatArray, fps: float = 30.0, cfg: DetectorConfig | Non
     """Per-frame flags [T], gaps shorter than `cfg.gap_s` bridged: what each arm does ("wave_left", "wave_right",
     "raise_left", "raise_right"; "point" and "reach", the right arm's only, as in the gesture library) and what
     both arms do together ("arms_crossed", "hands_on_hips"). A waving arm does nothing else; an arm held out ahead
-    is not raised."""
+    is neither raised nor crossed."""
     cfg = cfg or DetectorConfig()
     features = arm_features(qpos, fps, cfg)
     gap = round(cfg.gap_s * fps)
@@ -398,7 +398,7 @@ def gesture_flags(qpos: FloatArray, fps: float = 30.0, cfg: DetectorConfig | Non
             & (f.elbow_angle_deg > cfg.ahead_elbow_angle_deg) & ~waving
         )  # fmt: skip
         flags[f"raise_{side}"] = _bridge((f.height > cfg.raise_height_m) & ~waving & ~ahead[side], gap)
-        crossed[side] = (f.across < cfg.crossed_across_m) & (f.elbow_outward < cfg.crossed_elbow_outward_m) & ~waving
+        crossed[side] = (f.across < cfg.crossed_across_m) & (f.elbow_outward < cfg.crossed_elbow_outward_m) & ~waving & ~ahead[side]
         on_hip[side] = (
             (f.height < cfg.hip_height_m) & (f.elbow_outward > cfg.hip_elbow_outward_m) & (f.elbow_angle_deg < cfg.hip_elbow_angle_deg)
             & ~waving
