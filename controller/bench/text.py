@@ -44,7 +44,7 @@ from controller.bench.text_judge import (
     read_totals_as_expected,
 )
 from controller.text.executor import TextRunConfig
-from controller.text.program import DETECTED_GESTURES, GESTURE_NAMES, Program, PromptRefused
+from controller.text.program import GESTURE_NAMES, Program, PromptRefused
 from hw import g1
 from hw.errors import ConfigError
 from hw.shipped import config_dir
@@ -135,7 +135,7 @@ def judge(prompt: SuitePrompt, defaults: SuiteDefaults, result: dict[str, Any]) 
         return False, f"only {done} of {result['clauses_planned']} clauses ran", []
     tol = tolerances(prompt, defaults)
     if prompt.clauses:
-        return judge_clauses(result["clauses"], prompt.clauses, tol, DETECTED_GESTURES)
+        return judge_clauses(result["clauses"], prompt.clauses, tol, GESTURE_NAMES)
     e = prompt.expect or Expectation()
     forward, left = result["total_displacement"]
     miss = math.hypot(forward - e.forward_m, left - e.left_m)
@@ -144,7 +144,7 @@ def judge(prompt: SuitePrompt, defaults: SuiteDefaults, result: dict[str, Any]) 
     if abs(result["total_heading_change_deg"] - e.heading_deg) > tol.heading_deg:
         return False, f"turned {result['total_heading_change_deg']:.0f} degrees, expected {e.heading_deg:.0f}", []
     seen = {g for c in result["clauses"] for g in c["gestures"]}
-    missing = [g for g in e.gestures if g in DETECTED_GESTURES and g not in seen]
+    missing = [g for g in e.gestures if g in GESTURE_NAMES and g not in seen]
     if missing:
         return False, f"gestures {missing} not seen in the arm motion (seen: {sorted(seen) or 'none'})", []
     unasked = sorted(seen - set(e.gestures))
@@ -225,7 +225,7 @@ def _run_prompt(
     passed, reason, verdicts = judge(prompt, defaults, result)
     expected = prompt.clauses
     order = (
-        in_expected_order(result["clauses"], expected, tolerances(prompt, defaults), DETECTED_GESTURES)
+        in_expected_order(result["clauses"], expected, tolerances(prompt, defaults), GESTURE_NAMES)
         if expected
         else result["order_accuracy"] == 1.0
     )

@@ -11,6 +11,7 @@ g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--len
                       [--temperature T] [--split test|val] --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
 g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--text] [--text-slot]
+g1ctl bench gestures --data PATH [--data PATH ...] [--report PATH]     (--run-prompts DIR --seed S: executed clauses to score)
                  [--hardware sim-can]
 g1ctl bench typed [--instructions 20] [--refused 2] [--seed 0] [--min-gap 0.5] [--max-gap 3.0] [--hardware sim-can] [--report PATH]
 """
@@ -105,6 +106,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     typed.add_argument("--policy", default="fastsac")
     typed.add_argument("--hardware", default=None, help="through simulated hardware (sim-can, sim-mixed); default: the simulator")
     typed.add_argument("--report", type=Path, default=None)
+    gestures = bench_sub.add_parser("gestures", help="the arm gesture detector's recall and precision on labelled executed motion")
+    gestures.add_argument("--data", type=Path, action="append", default=[], help="a recorded dataset or a folder of executed clauses")
+    gestures.add_argument("--run-prompts", type=Path, default=None, help="run the bench's prompts on the simulator, keep the clauses here")
+    gestures.add_argument("--seed", type=int, default=0, help="with --run-prompts: the simulation seed")
+    gestures.add_argument("--policy", default="fastsac", help="with --run-prompts: locomotion policy preset of the tracker")
+    gestures.add_argument("--report", type=Path, default=None)
     caption = bench_sub.add_parser("caption", help="how captions change the planner's plans (text conditioning)")
     caption.add_argument("--data", type=Path, default=None, help="recorded dataset: captioned test windows (default: standing only)")
     caption.add_argument("--model", type=Path, default=None, help="planner model folder (default: the shipped one)")
@@ -145,6 +152,8 @@ def run(args: argparse.Namespace) -> int:
         return _caption(args)
     if args.bench_command == "typed":
         return _typed(args)
+    if args.bench_command == "gestures":
+        return _gestures(args)
     if args.bench_command == "estimator":
         return _estimator(args)
     if args.bench_command == "recorder":
@@ -216,6 +225,26 @@ def _typed(args: argparse.Namespace) -> int:
     print(json.dumps({k: v for k, v in report.items() if k != "log"}, indent=2))
     _save(report, args.report)
     return 0 if report["targets_met"] else 1
+
+
+def _gestures(args: argparse.Namespace) -> int:
+    import sys  # noqa: PLC0415
+
+    from controller.bench import gestures as bg  # noqa: PLC0415
+    from controller.text.gesture_detector import detect_gestures  # noqa: PLC0415
+
+    if args.run_prompts is not None:
+        kept = bg.record_clauses(
+            bg.PROMPTS, args.run_prompts, args.seed, args.policy, lambda line: print(line, file=sys.stderr, flush=True)
+        )
+        print(json.dumps({"out": str(args.run_prompts), "clauses": kept, "seed": args.seed}))
+        return 0
+    if not args.data:
+        raise ConfigError("bench gestures needs --data PATH (a recorded dataset or executed clauses) or --run-prompts DIR")
+    report = bg.run_gesture_bench(args.data, detect_gestures)
+    print(bg.format_table(report))
+    _save(report, args.report)
+    return 0
 
 
 def _estimator(args: argparse.Namespace) -> int:

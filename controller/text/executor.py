@@ -56,7 +56,7 @@ from controller.reference.planned import PlannedReference
 from controller.reference.source import ReferenceSource
 from controller.reference.waypoints import Follower, WaypointConfig, WaypointFollower
 from controller.reference.window import ReferenceWindow
-from controller.text.program import DETECTED_GESTURES, Clause, Curve, Program, library_gesture
+from controller.text.program import Clause, Curve, Program, library_gesture
 from hw import g1, quat
 from hw.errors import ConfigError
 from hw.types import FloatArray, RobotState
@@ -298,7 +298,7 @@ class TextReference(ReferenceSource):
             turn = math.degrees(abs(float(quat.wrap_angle(pose[2] - record.intended_end[2]))))
             if miss > cfg.correct_position_m or turn > cfg.correct_heading_deg:
                 problems.append(f"ended {miss:.2f} m and {turn:.0f} degrees from its goal")
-        asked = set(record.clause.gestures) & set(DETECTED_GESTURES)
+        asked = set(record.clause.gestures)
         if self.detect is not None and asked and len(record.own_frames) > 1:
             # A clause's gestures are in force to its end: its last frames show them, and the detector's cost (about
             # 7 ms for 500 frames) stays bounded on a control thread however long the clause was.

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from controller.text.program import DETECTED_GESTURES, Clause
+from controller.text.program import Clause
 from hw import g1
 from hw.types import FloatArray
 
@@ -42,6 +42,10 @@ _GESTURE_PHRASES = {
     "raise_left": "raise the left arm",
     "raise_right": "raise the right arm",
     "raise_both": "raise both arms",
+    "reach": "reach forward with the right hand",
+    "point": "point to the front right",
+    "arms_crossed": "cross the arms",
+    "hands_on_hips": "put the hands on the hips",
 }
 MIN_DISTANCE_M = 0.2  # a segment that moved less than this stood (a stop carries the robot a few centimetres)
 MIN_TURN_DEG = 20.0  # ... or turned less than this did not turn
@@ -68,7 +72,7 @@ def motion_caption(forward_m: float, left_m: float, heading_deg: float, gestures
         degrees = max(45, round(abs(heading_deg) / 45.0) * 45)
         parts.append(f"turn {'left' if heading_deg > 0 else 'right'} {degrees} degrees")
     base = " and ".join(parts) or "stand still"
-    edits = [_GESTURE_PHRASES[g] for g in gestures if g in _GESTURE_PHRASES]
+    edits = [_GESTURE_PHRASES[g] for g in gestures]
     return f"{base} and {' and '.join(edits)}" if edits else base
 
 
@@ -77,9 +81,9 @@ def _half_meters(distance: float) -> float:
 
 
 def clause_caption(clause: Clause) -> str:
-    """The clause as resolved, in the words of `motion_caption`: its goal displacement, turn and detectable gestures."""
+    """The clause as resolved, in the words of `motion_caption`: its goal displacement, turn and gestures."""
     forward, left, heading = clause.displacement
-    return motion_caption(forward, left, heading, [g for g in clause.gestures if g in DETECTED_GESTURES])
+    return motion_caption(forward, left, heading, clause.gestures)
 
 
 def order_assignment(segment_captions: Sequence[str], clause_captions: Sequence[str], embed: Embed) -> list[int]:

@@ -20,7 +20,6 @@ GESTURE_NAMES: tuple[str, ...] = (
     "wave_left", "wave_right", "wave_both", "raise_left", "raise_right", "raise_both",
     "reach", "point", "arms_crossed", "hands_on_hips",
 )  # fmt: skip
-DETECTED_GESTURES: tuple[str, ...] = GESTURE_NAMES[:6]  # what the motion detector recognizes in executed arm motion
 # The arms each gesture moves: a clause has at most one gesture per arm.
 GESTURE_ARMS: dict[str, frozenset[str]] = {
     "wave_left": frozenset({"left"}), "wave_right": frozenset({"right"}), "wave_both": frozenset({"left", "right"}),

@@ -31,7 +31,7 @@ def test_motion_caption_describes_what_was_measured() -> None:
 
 def test_clause_caption_uses_the_resolved_goal() -> None:
     clause = Clause("could you back up a meter", Motion((RelativeWaypoint(-1.0, 0.0, 0.0),)), gestures=("raise_left", "point"))
-    assert clause_caption(clause) == "walk backward 1.0 meters and raise the left arm"  # point is not detectable
+    assert clause_caption(clause) == "walk backward 1.0 meters and raise the left arm and point to the front right"
 
 
 @pytest.fixture(scope="module")
