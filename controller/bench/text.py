@@ -233,7 +233,7 @@ def _run_prompt(
         "pass": passed,
         "misread": False,
         "reason": reason,
-        "clauses": len(program.clauses),
+        "clauses": len(expected) if expected else program.typed_clauses,  # as the suite counts them (typed, or expected)
         "clause_verdicts": verdicts,
         "falls": result["falls"],
         "total_displacement": result["total_displacement"],
