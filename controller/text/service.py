@@ -11,8 +11,8 @@ Off by default (`--text` turns it on), since 2026-12-02. Measured with `g1ctl be
 the clause text moves a composed plan about as much as another sampling seed does, and what it adds
 is what the prompt did not ask for: in "walk an arc ..., then walk straight ahead one metre" the
 planner raised the right arm for a second during the straight walk (the training captions' arm
-motion), a gesture the per-clause checks count as unasked; without the text, none. The figures are
-in docs/text-planning.md ("The text slot").
+motion), a gesture the per-clause checks count as unasked; without the text, none (both before the
+free arms were held in every clause). The figures are in docs/text-planning.md ("The text slot").
 """
 
 from __future__ import annotations
