@@ -292,7 +292,9 @@ class TextReference(ReferenceSource):
         if len(record.corrections) >= cfg.max_corrections:
             return None
         problems = []
-        if record.intended_end is not None and state.has_base_position:
+        # Only a clause that moves is re-approached: one that stands (a gesture, a pause) steers to no position, and goes on
+        # where the estimate of it has failed (hanging in a gantry the legs step in the air and the estimate drifts off).
+        if record.clause.motion is not None and record.intended_end is not None and state.has_base_position:
             pose = _pose(state)
             miss = math.hypot(pose[0] - record.intended_end[0], pose[1] - record.intended_end[1])
             turn = math.degrees(abs(float(quat.wrap_angle(pose[2] - record.intended_end[2]))))

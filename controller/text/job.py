@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 from controller.commands.velocity import CommandLimits
 from controller.reference.planned import PlannedReference
 from controller.reports import write_report
-from controller.text.executor import TextReference, TextRunConfig, estimate_seconds
+from controller.text.executor import GESTURE_REDO_S, SETTLE_PER_WAYPOINT_S, TextReference, TextRunConfig, estimate_seconds
 from controller.text.metrics import Embed
 from controller.text.program import Program
 from controller.text.report import Detect, text_report
@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from controller.runtime.backend_registry import BackendChoice
 
 SETTLE_S = 1.0  # the run goes on this long after the last clause
+CORRECTION_S = GESTURE_REDO_S + SETTLE_PER_WAYPOINT_S  # a correction: a gesture held on, or a short re-approach and its settle
 MAX_SECONDS = 180.0
 
 
@@ -54,6 +55,7 @@ def budget_seconds(program: Program, cfg: TextRunConfig) -> float:
     seconds, here = SETTLE_S, (0.0, 0.0, 0.0)
     for clause in program.clauses:
         seconds += cfg.timeout_factor * estimate_seconds(clause, here, here) + cfg.timeout_margin_s
+        seconds += cfg.max_corrections * (CORRECTION_S + cfg.timeout_margin_s)  # each correction a clause may need
     return min(seconds, MAX_SECONDS)
 
 
