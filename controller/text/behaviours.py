@@ -551,6 +551,13 @@ def repeat(args: Args, ctx: Context, head: Lexeme) -> PhraseStep:
 _GESTURES = ("wave", "raise", "point", "reach", "arms_crossed", "hands_on_hips")
 
 
+Handler = Callable[[Args, Context, Lexeme], PhraseStep]
+# One handler per behaviour; the gestures share `gesture`, which takes the behaviour's name.
+HANDLERS: dict[str, Handler] = {
+    "walk": walk, "turn": turn, "path": path, "stand": stand, "return": return_, "lower": lower, "hold": hold, "repeat": repeat,
+}  # fmt: skip
+
+
 def phrase_step(part: Part, ctx: Context) -> PhraseStep:
     """The part's step: its head found, its handler run on the other lexemes."""
     lexemes = [x for x in part.lexemes if x.cat is not Cat.PUNCT]
@@ -563,22 +570,9 @@ def phrase_step(part: Part, ctx: Context) -> PhraseStep:
         amounts = (Cat.QUANTITY, Cat.VAGUE, Cat.ANGLE, Cat.SHAPE, Cat.PLACE)
         if not any(x.cat in amounts for x in lexemes):
             raise refuse(part.text, REASONS["unbounded"])  # "keep walking forward": for how long?
-    if behaviour == "walk":
-        return walk(args, ctx, first)
-    if behaviour == "turn":
-        return turn(args, ctx, first)
-    if behaviour == "path":
-        return path(args, ctx, first)
-    if behaviour == "stand":
-        return stand(args, ctx, first)
-    if behaviour == "return":
-        return return_(args, ctx, first)
-    if behaviour == "lower":
-        return lower(args, ctx, first)
-    if behaviour == "hold":
-        return hold(args, ctx, first)
-    if behaviour == "repeat":
-        return repeat(args, ctx, first)
+    handler = HANDLERS.get(behaviour)
+    if handler is not None:
+        return handler(args, ctx, first)
     step = gesture(args, ctx, first, behaviour)
     if first.cat is Cat.VERB and first.value == "hold" and not any(x.cat is Cat.QUANTITY for x in lexemes):
         return replace(step, open_ended=True)
