@@ -7,15 +7,17 @@ an slcan adapter on a pseudo-terminal (what a USB-CAN adapter speaks). Once its 
 prints one JSON line saying where they are, `{"ready": true, "pid": N, "buses": {"can0": "/dev/pts/5",
 ...}}`; the host puts those paths into its copy of the config (`controller/runtime/bus_process.py`).
 
-One loop on one thread: it waits on every port until the next 2 ms physics step is due, answers
-what arrived (a batch of frames in one write), and steps: the motors' control step, the physics,
-fresh status and an IMU frame. The physics waits for the first command that holds a joint (the
-host's soft start): until then the G1 stands still in its default pose, as the simulated G1 over
-DDS does. From then it follows the wall clock, and catches up step by step (answering the ports
-between steps) when the machine held the process back. A fault plan's faults strike at their
-times on the physics' clock. With `truth` it sends its ground truth (time, qpos, qvel) every 10 ms
-as a datagram to that UNIX socket (the host's metrics and fall detection). It stops after
-`duration_s`, or on SIGTERM/SIGINT, and returns what it counted, the wire audit included.
+One loop on one thread: it waits on every port until the next 2 ms physics step is due, answers what
+arrived (a batch of frames in one write; RS-485 ports first, whose next command waits on the reply),
+and steps: the motors' control step, the physics, fresh status and an IMU frame, answering what
+arrives between those parts, so that a frame waits for one part, not for the whole step. The physics
+waits for the first command that holds a joint (the host's soft start): until then the G1 stands
+still in its default pose, as the simulated G1 over DDS does. From then it follows the wall clock,
+and catches up step by step (answering the ports between steps) when the machine held the process
+back. A fault plan's faults strike at their times on the physics' clock. With `truth` it sends its
+ground truth (time, qpos, qvel) every 10 ms as a datagram to that UNIX socket (the host's metrics
+and fall detection). It stops after `duration_s`, or on SIGTERM/SIGINT, and returns what it counted,
+the wire audit included.
 """
 
 from __future__ import annotations
@@ -155,7 +157,7 @@ class _Server:
 
     def _step(self) -> None:
         t0 = time.perf_counter()
-        self.rig.step()
+        self.rig.step(between=self._answer_arrived)  # a motor answers while its control loop runs
         self.step_times.append(time.perf_counter() - t0)
         self.steps += 1
         if self._truth is not None and self.cfg.truth is not None and self.steps % TRUTH_EVERY == 0:
@@ -166,6 +168,9 @@ class _Server:
                 self.truth_sent += 1
             except OSError:  # nobody listens (yet), or the listener is behind: the newest sample counts, not this one
                 self.truth_lost += 1
+
+    def _answer_arrived(self) -> None:
+        self._serve(0.0)
 
     def _serve(self, timeout: float) -> None:
         due = [d for e in self.rig.emulators if (d := e.next_due()) is not None]

@@ -170,7 +170,8 @@ def turning_walk(frames: int = 80, yaw0: float = 2.5, turn: float = 0.04, seed: 
     qpos[:, 2] = 0.78 + 0.01 * np.sin(t / 3)
     tilt = quat.exp(np.stack((0.05 * np.sin(t / 5), 0.03 * np.cos(t / 4), np.zeros(frames)), axis=-1))
     qpos[:, 3:7] = quat.multiply(quat.from_yaw(yaw), tilt)
-    qpos[:, 7:] = 0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS))
+    limits = np.array([joint.position_limits for joint in g1.G1_JOINTS])
+    qpos[:, 7:] = np.clip(0.3 * np.sin(t[:, None] / 6 + rng.uniform(0, 6, g1.NUM_JOINTS)), *limits.T)  # keyframes must be within them
     return qpos
 
 

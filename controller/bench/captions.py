@@ -205,6 +205,11 @@ def run_caption_bench(cfg: CaptionConfig) -> dict[str, Any]:
     from sim.kinematics import G1Kinematics  # noqa: PLC0415
 
     planner = Planner.load(cfg.model_dir, threads=1)
+    if not planner.text_conditioned:
+        raise ConfigError(
+            f"the planner model in {cfg.model_dir or 'models/planner'} was trained without text (planner.json: text_conditioned "
+            "false), so there is no caption to measure; pass --model with a text-conditioned model"
+        )
     kin = G1Kinematics(ensure_assets(cfg.assets_dir, quiet=True).g1_mjcf)
     encoder = shared_encoder()
     report = run_on(planner, encoder.embed, kin, cfg, clips)

@@ -2,11 +2,13 @@
 
 Usage:
     g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45]
-                          [--windows 200] [--seed 0] [--model DIR] [--temperature T] [--split val] --report PATH
+                          [--windows 200] [--seed 0] [--model DIR] [--temperature T] [--residual-gain G] [--split val] --report PATH
+    g1ctl bench inbetween --data PATH --only bonus --split all ...   (a style the model was trained without)
 
 Protocol. For each transition length L, up to `--windows` windows are drawn at random
 (seeded) from the test split of the clips (`--split val`: the validation split, where
-sampling settings are chosen; never tune on test): 4 context frames, the L true transition frames,
+sampling settings are chosen; never tune on test; `--only STYLE --split all`: every clip of a
+style held out of training, `controller.motion_data.styles`): 4 context frames, the L true transition frames,
 the target frame, and the true frame after the target (only hermite reads it, for its
 arrival velocity). Every method gets the same windows: the context and the full target
 frame (pose and root), and returns the L transition frames plus the frame it puts at the
@@ -20,8 +22,14 @@ target. Forward kinematics of the G1 turns frames into body poses; the metrics
   L + 1 accelerations at the context's last frame and at each transition frame. A velocity
   break at the start or a jump onto the target counts; the truth's own figures for the
   same frames are in the report's `ground_truth`.
+- Plausibility (wild_share, beyond_limits_share; `controller.planner.plausibility`): the share of
+  the L transition frames beyond what the motion data ever shows (pelvis tilt, root-height change
+  from the context's last frame and from frame to frame), and the share of their joint values
+  outside the G1's limits, as the method made them (no method clamps). Foot skate is above.
 - Target metrics (tgt_keyframe_err, tgt_root_err, reach_success) read the frame the method
   puts at the target (the baselines: the target itself; zerovel: the held frame).
+- `ours_vel`: `ours` with the target keyframe's true velocity (`Keyframe.velocity`, from the
+  frame after the target, as `hermite` gets it); for models trained with keyframe velocities.
 - diversity: for stochastic methods, seeds 0..9 on the first 20 windows of each length.
 - latency_ms: one 44-frame plan of `ours`, one intra-op thread, 200 timed calls after warm-up.
 """
@@ -35,10 +43,21 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from controller.bench import baselines
 from controller.bench import motion_metrics as mt
-from controller.planner.request import ALLOWED_LENGTHS, CONTEXT_FRAMES, FPS, MAX_LENGTH, FloatArray, Keyframe, PlanRequest
+from controller.planner import plausibility
+from controller.planner.request import (
+    ALLOWED_LENGTHS,
+    CONTEXT_FRAMES,
+    FPS,
+    KEYFRAME_LIMIT_TOLERANCE_RAD,
+    MAX_LENGTH,
+    FloatArray,
+    Keyframe,
+    PlanRequest,
+)  # fmt: skip
 from controller.reports import percentiles_ms
 from hw import g1
 from hw.errors import ConfigError
@@ -53,6 +72,8 @@ TABLE_COLUMNS = (
     ("foot_skate", "skate m/s"),
     ("joint_jitter", "jitter m/s2"),
     ("root_jitter", "root jit"),
+    ("wild_share", "wild"),
+    ("beyond_limits_share", "beyond lim"),
     ("tgt_keyframe_err", "tgt err m"),
     ("tgt_root_err", "root err m"),
     ("reach_success", "reach"),
@@ -80,7 +101,9 @@ class InbetweenConfig:
     assets_dir: str | None = None
     model_dir: Path | None = None
     temperature: float | None = None  # ours: sampling noise scale (default: the model's)
-    split: str = "test"
+    residual_gain: float | None = None  # ours: share of the learned residual added to the anchor (default: the model's)
+    split: str = "test"  # "all": every split, for a style the model was trained without (`only`)
+    only: tuple[str, ...] = ()  # clip name patterns (controller.motion_data.styles): score on these clips alone
     diversity_windows: int = 20
     diversity_seeds: int = 10
     latency_repeats: int = 200
@@ -139,13 +162,14 @@ def _zerovel(cfg: InbetweenConfig) -> Method:
     return Method(lambda w, _seed: np.vstack((baselines.zerovel(w.context, w.target, w.length), w.context[-1])))
 
 
-def _ours(cfg: InbetweenConfig) -> Method:
+def _ours(cfg: InbetweenConfig, target_velocity: bool = False) -> Method:
     from controller.planner.runtime import Planner  # noqa: PLC0415 - the learned planner is optional here
 
-    planner = Planner.load(cfg.model_dir, threads=1, temperature=cfg.temperature)
+    planner = Planner.load(cfg.model_dir, threads=1, temperature=cfg.temperature, residual_gain=cfg.residual_gain)
 
     def request(w: Window, seed: int, lengths: tuple[int, ...] | None = None, frame: int | None = None) -> PlanRequest:
-        key = Keyframe(frame=w.length if frame is None else frame, qpos=w.target)
+        velocity = baselines.finite_velocity(w.target, w.after_target) if target_velocity else None
+        key = Keyframe(frame=w.length if frame is None else frame, qpos=w.target, velocity=velocity)
         return PlanRequest(context=w.context, keyframes=(key,), lengths=lengths or (plan_length(w.length),), seed=seed)
 
     def predict(w: Window, seed: int) -> FloatArray:
@@ -162,10 +186,17 @@ def _ours(cfg: InbetweenConfig) -> Method:
             times.append(time.perf_counter() - started)
         return percentiles_ms(times)
 
-    return Method(predict, stochastic=True, latency=latency)
+    return Method(predict, stochastic=True, latency=None if target_velocity else latency)
 
 
-METHODS: dict[str, Callable[[InbetweenConfig], Method]] = {"ours": _ours, "interp": _interp, "hermite": _hermite, "zerovel": _zerovel}
+def _ours_vel(cfg: InbetweenConfig) -> Method:
+    """`ours` told the true velocity at the target (`Keyframe.velocity`), as `hermite` is: judged against it."""
+    return _ours(cfg, target_velocity=True)
+
+
+METHODS: dict[str, Callable[[InbetweenConfig], Method]] = {
+    "ours": _ours, "interp": _interp, "hermite": _hermite, "zerovel": _zerovel, "ours_vel": _ours_vel,
+}  # fmt: skip
 
 
 def plan_length(length: int) -> int:
@@ -207,15 +238,21 @@ def validate(cfg: InbetweenConfig) -> None:
         raise ConfigError(f"transition lengths must be at least 1 frame, got {list(cfg.lengths)}")
     if cfg.windows < 1:
         raise ConfigError(f"--windows must be at least 1, got {cfg.windows}")
-    if "ours" in cfg.methods:
+    if "ours" in cfg.methods or "ours_vel" in cfg.methods:
         for length in cfg.lengths:
             plan_length(length)
 
 
 def draw_windows(clips: Sequence[Clip], length: int, count: int, seed: int) -> list[Window]:
-    """Up to `count` distinct windows for transition length `length`, uniform over every (clip, offset) that fits."""
+    """Up to `count` distinct windows for transition length `length`, uniform over every (clip, offset) that fits.
+
+    A window whose target pose has a joint outside the G1's limits is not drawn: the planner
+    refuses such a keyframe (`PlanRequest`), and a robot's recorded pose can be one (MuJoCo's
+    soft limits let a loaded joint pass its limit by up to 0.05 rad in `data/rec2`).
+    """
     span = CONTEXT_FRAMES + length + 2
-    starts = np.array([max(len(c.qpos) - span + 1, 0) for c in clips], dtype=np.int64)
+    offsets = [_targets_within_limits(c.qpos, length, span) for c in clips]
+    starts = np.array([len(o) for o in offsets], dtype=np.int64)
     total = int(starts.sum())
     if total == 0:
         longest = max((len(c.qpos) for c in clips), default=0)
@@ -226,11 +263,19 @@ def draw_windows(clips: Sequence[Clip], length: int, count: int, seed: int) -> l
     windows = []
     for pick in picks:
         index = int(np.searchsorted(bounds, pick, side="right"))
-        start = int(pick - (bounds[index] - starts[index]))
+        start = int(offsets[index][pick - (bounds[index] - starts[index])])
         clip = clips[index]
         frames = np.asarray(clip.qpos[start : start + span], dtype=np.float64)
         windows.append(Window(clip.name, start, length, frames))
     return windows
+
+
+def _targets_within_limits(qpos: FloatArray, length: int, span: int) -> NDArray[np.int64]:
+    """The offsets of a clip where a window fits and its target frame is within the joint limits."""
+    fits = max(len(qpos) - span + 1, 0)
+    targets = np.asarray(qpos[CONTEXT_FRAMES + length : CONTEXT_FRAMES + length + fits, g1.QPOS_JOINTS], dtype=np.float64)
+    inside = ~plausibility.beyond_limits(targets, KEYFRAME_LIMIT_TOLERANCE_RAD).any(axis=-1)
+    return np.flatnonzero(inside).astype(np.int64)
 
 
 class _Kinematics(Protocol):
@@ -270,6 +315,8 @@ def evaluate(
         "foot_skate": mt.foot_skate(motion_feet),
         "joint_jitter": mt.joint_jitter(motion_pos),
         "root_jitter": mt.root_jitter(motion_pos),
+        "wild_share": float(plausibility.wild_frames(pred[:, inner], true_frames[:, 1]).mean()),
+        "beyond_limits_share": float(plausibility.beyond_limits(pred[:, inner, joints]).mean()),
         "tgt_keyframe_err": float(mt.keyframe_error(pos[:, length], true_pos[:, at]).mean()),
         "tgt_root_err": float(mt.root_error(pred[:, length, root], true_frames[:, at, root]).mean()),
         "reach_success": float(
@@ -306,6 +353,8 @@ def run_on_clips(clips: Sequence[Clip], cfg: InbetweenConfig, kin: _Kinematics) 
             "foot_skate": round(mt.foot_skate(true_feet[:, 1:]), 6),
             "joint_jitter": round(mt.joint_jitter(true_pos), 6),
             "root_jitter": round(mt.root_jitter(true_pos), 6),
+            "wild_share": round(float(plausibility.wild_frames(true_frames[:, 2:-1], true_frames[:, 1]).mean()), 6),
+            "beyond_limits_share": round(float(plausibility.beyond_limits(true_frames[:, 2:-1, g1.QPOS_JOINTS]).mean()), 6),
         }
         for name, method in methods.items():
             results[name][str(length)] = evaluate(method, windows, kin, truth, cfg)
@@ -335,14 +384,24 @@ def run_on_clips(clips: Sequence[Clip], cfg: InbetweenConfig, kin: _Kinematics) 
     }
 
 
-def load_test_clips(path: Path, split: str = "test") -> Sequence[Clip]:
+def load_test_clips(path: Path, split: str = "test", only: tuple[str, ...] = ()) -> Sequence[Clip]:
     if not Path(path).exists():
         raise ConfigError(f"no motion data at {path}; pass --data with a recorded dataset folder")
-    if split not in ("test", "val"):
-        raise ConfigError(f"the benchmark runs on held-out clips: split 'test' or 'val', got '{split}'")
+    if split not in ("test", "val", "all"):
+        raise ConfigError(f"the benchmark runs on held-out clips: split 'test', 'val' or 'all' (with --only), got '{split}'")
+    if split == "all" and not only:
+        raise ConfigError("--split all scores clips a model may have trained on; give --only with the style it was trained without")
+    from controller.motion_data import styles  # noqa: PLC0415
     from controller.motion_data.dataset import load_dataset  # noqa: PLC0415 - written beside this benchmark
 
-    clips = list(load_dataset(Path(path), split=split))
+    clips = list(load_dataset(Path(path), split=None if split == "all" else split))
+    if only:
+        missing = styles.unmatched([c.name for c in clips], only)
+        if missing:
+            known = ", ".join(styles.folder_prefixes(c.name for c in clips))
+            which = "" if split == "all" else f"{split} "
+            raise ConfigError(f"--only {','.join(missing)} matches no {which}clip in {path}; its clips' folders: {known}")
+        clips = [c for c in clips if styles.matches(c.name, only)]
     if not clips:
         raise ConfigError(f"no {split} clips in {path}; the benchmark runs on held-out clips only")
     return clips
@@ -351,7 +410,7 @@ def load_test_clips(path: Path, split: str = "test") -> Sequence[Clip]:
 def run_inbetween_bench(cfg: InbetweenConfig) -> dict[str, Any]:
     """Load the test clips and the G1 kinematics, run every method, return the JSON report."""
     validate(cfg)
-    clips = load_test_clips(cfg.data, cfg.split)
+    clips = load_test_clips(cfg.data, cfg.split, cfg.only)
     from controller.assets import ensure_assets  # noqa: PLC0415 - MuJoCo only for this command
     from sim.kinematics import G1Kinematics  # noqa: PLC0415
 
@@ -361,8 +420,10 @@ def run_inbetween_bench(cfg: InbetweenConfig) -> dict[str, Any]:
         "benchmark": "inbetween",
         "data": str(cfg.data),
         "split": cfg.split,
+        "only": list(cfg.only),
         "clips": len(clips),
         "temperature": cfg.temperature,
+        "residual_gain": cfg.residual_gain,
         **report,
     }
 
@@ -372,6 +433,8 @@ def format_table(report: dict[str, Any]) -> str:
     width = 12
     header = f"{'method':<10}" + "".join(f"{label:>{width}}" for _, label in TABLE_COLUMNS)
     source = f"{report.get('data', '')}, {report.get('split', 'test')} split"
+    if report.get("only"):
+        source += f", only {','.join(report['only'])}"
     lines = [f"in-betweening benchmark: {source} (seed {report['seed']}, {report['fps']:g} fps)"]
     for length in report["lengths"]:
         key = str(length)
@@ -380,7 +443,7 @@ def format_table(report: dict[str, Any]) -> str:
             row = report["results"][name][key]
             lines.append(f"{name:<10}" + "".join(f"{row[metric]:>{width}.4f}" for metric, _ in TABLE_COLUMNS))
         gt = report["ground_truth"][key]
-        cells = {"foot_skate": gt["foot_skate"], "joint_jitter": gt["joint_jitter"], "root_jitter": gt["root_jitter"]}
+        cells = {key: gt[key] for key in ("foot_skate", "joint_jitter", "root_jitter", "wild_share", "beyond_limits_share")}
         lines.append(f"{'truth':<10}" + "".join(f"{cells[m]:>{width}.4f}" if m in cells else f"{'':>{width}}" for m, _ in TABLE_COLUMNS))
     if report.get("latency_ms"):
         lat = report["latency_ms"]

@@ -14,12 +14,12 @@ import itertools
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from controller.planner.plausibility import CONTACT_HEIGHT_M
 from controller.planner.request import FPS
 from hw import quat
 
 FloatArray = NDArray[np.float64]
 
-CONTACT_HEIGHT_M = 0.05  # the rule of sim.kinematics.foot_contacts, restated here without MuJoCo
 REACH_POSITION_M = 0.05
 REACH_HEADING_RAD = np.deg2rad(15.0)
 ROOT_BODY_INDEX = 0  # the pelvis in the body axis B (hw.g1.ROOT_BODY names it)

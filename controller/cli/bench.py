@@ -7,8 +7,9 @@ g1ctl bench hw [--report PATH] [--seconds 60] [--rt-priority 50] [--cpu N]
 g1ctl bench dds [--report PATH] [--seconds 30] [--rt-priority 50] [--cpu N] [--hardware sim-dds]
 g1ctl bench buses [--report PATH] [--rates 250,333.333,400,500] [--seconds 10] [--hardware sim-can-process] [--rt-priority N]
                   [--cpu N]
-g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel] [--lengths 15,30,45] [--windows N] [--seed S]
-                      [--temperature T] [--split test|val] --report PATH
+g1ctl bench inbetween --data PATH [--methods ours,interp,hermite,zerovel,ours_vel] [--lengths 15,30,45] [--windows N] [--seed S]
+                      [--temperature T] [--residual-gain G] [--split test|val|all] [--only STYLE]
+                      --report PATH
 g1ctl bench caption [--data PATH] [--model DIR] [--seeds 8] [--windows 200] --report PATH
 g1ctl bench text [--suite configs/prompts/suite.yaml] [--report PATH] [--seed S] [--limit N] [--no-kinematic] [--text] [--text-slot]
 g1ctl bench gestures --data PATH [--data PATH ...] [--report PATH]     (--run-prompts DIR --seed S: executed clauses to score)
@@ -74,13 +75,26 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
     inbetween = bench_sub.add_parser("inbetween", help="motion in-betweening on held-out clips: the planner against baselines")
     inbetween.add_argument("--data", type=Path, default=None, help="recorded motion dataset (its test split is used)")
-    inbetween.add_argument("--methods", default="ours,interp,hermite,zerovel", help="comma-separated: ours, interp, hermite, zerovel")
+    inbetween.add_argument(
+        "--methods", default="ours,interp,hermite,zerovel", help="comma-separated: ours, interp, hermite, zerovel, ours_vel"
+    )
     inbetween.add_argument("--lengths", default="15,30,45", help="comma-separated transition lengths (frames at 30 fps)")
     inbetween.add_argument("--windows", type=int, default=200, help="windows per length, at most")
     inbetween.add_argument("--seed", type=int, default=0)
     inbetween.add_argument("--model", type=Path, default=None, help="planner model folder for 'ours' (default: the shipped one)")
     inbetween.add_argument("--temperature", type=float, default=None, help="ours: sampling noise scale (default: the model's)")
-    inbetween.add_argument("--split", default="test", choices=("test", "val"), help="held-out split (choose settings on val only)")
+    inbetween.add_argument(
+        "--residual-gain",
+        type=float,
+        default=None,
+        help="ours: share of the learned residual added to the anchor, 0-1, with or without keyframe velocities (default: the model's)",
+    )
+    inbetween.add_argument(
+        "--split", default="test", choices=("test", "val", "all"), help="held-out split (choose settings on val only; all: with --only)"
+    )
+    inbetween.add_argument(
+        "--only", default=None, help="score only clips of these styles, e.g. bonus or 'dance-B_*' (comma-separated; see --hold-out)"
+    )
     inbetween.add_argument("--report", type=Path, default=None)
 
     text = bench_sub.add_parser("text", help="a suite of typed prompts run on the simulated G1: pass/fail, order, transitions")
@@ -170,12 +184,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _inbetween(args: argparse.Namespace) -> int:
     from controller.bench import inbetween as bi  # noqa: PLC0415
+    from controller.motion_data.styles import parse_patterns  # noqa: PLC0415
 
     if args.data is None:
         raise ConfigError("bench inbetween needs --data PATH: a recorded motion dataset")
     cfg = bi.InbetweenConfig(
         data=args.data, methods=bi.parse_methods(args.methods), lengths=bi.parse_lengths(args.lengths), windows=args.windows,
         seed=args.seed, assets_dir=args.assets_dir, model_dir=args.model, temperature=args.temperature, split=args.split,
+        residual_gain=args.residual_gain, only=() if args.only is None else parse_patterns(args.only, "--only"),
     )  # fmt: skip
     report = bi.run_inbetween_bench(cfg)
     print(bi.format_table(report))

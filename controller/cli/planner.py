@@ -1,7 +1,8 @@
 """`g1ctl train planner` and `g1ctl viz plan`.
 
 g1ctl train planner --data DATASET [--data DATASET ...] --out DIR [--steps N] [--data-weights 1,1,2]
-                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12] [--free-share 0]
+                    [--no-mirror] [--text-dropout 0.3] [--text-variants 12] [--free-share 0] [--hold-out bonus]
+                    [--velocity-share 0.3] [--speed-factors 0.8,1.25] [--residual-gain 1] [--velocity-residual-gain G]
 g1ctl viz plan --out plan.png [--model DIR] [--data DATASET] [--seeds 4] [--length 44]
 g1ctl viz plan --out plan.mp4 --target 1.2,0.4,0.8
 """
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.motion_data.styles import parse_patterns
 from controller.planner.request import Keyframe
 from hw.errors import ConfigError
 
@@ -34,6 +36,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     planner.add_argument("--text-dropout", type=float, default=None, help="share of windows without text (1: no text at all)")
     planner.add_argument("--text-variants", type=int, default=None, help="paraphrases per caption, the caption included")
     planner.add_argument("--free-share", type=float, default=None, help="share of windows with no constraint at all (default 0)")
+    planner.add_argument(
+        "--hold-out", default=None, help="leave these styles out of every split: clip name patterns, e.g. bonus or 'dance-B_*'"
+    )
+    planner.add_argument("--velocity-share", type=float, default=None, help="share of windows whose keyframes carry their velocity (0.3)")
+    planner.add_argument("--speed-factors", default=None, help="imported clips also played this many times faster, e.g. 0.8,1.25")
+    planner.add_argument("--residual-gain", type=float, default=None, help="share of the learned residual added to the anchor (1)")
+    planner.add_argument(
+        "--velocity-residual-gain", type=float, default=None, help="the same where a keyframe carries its velocity (--residual-gain)"
+    )
     planner.add_argument("--no-progress", action="store_true")
 
     viz = sub.add_parser("viz", help="pictures and videos of plans")
@@ -69,6 +80,16 @@ def run_train(args: argparse.Namespace) -> int:
         cfg = replace(cfg, text_variants=args.text_variants)
     if args.free_share is not None:
         cfg = replace(cfg, free_share=args.free_share)
+    if args.hold_out is not None:
+        cfg = replace(cfg, hold_out=parse_patterns(args.hold_out, "--hold-out"))
+    if args.velocity_share is not None:
+        cfg = replace(cfg, velocity_share=args.velocity_share)
+    if args.speed_factors is not None:
+        cfg = replace(cfg, speed_factors=_numbers(args.speed_factors, "--speed-factors", "0.8,1.25"))
+    if args.residual_gain is not None:
+        cfg = replace(cfg, residual_gain=args.residual_gain)
+    if args.velocity_residual_gain is not None:
+        cfg = replace(cfg, velocity_residual_gain=args.velocity_residual_gain)
     if args.steps is not None:
         if args.steps < 1:
             raise ConfigError(f"--steps must be at least 1, got {args.steps}")
@@ -79,11 +100,15 @@ def run_train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _weights(text: str, folders: int) -> tuple[float, ...]:
+def _numbers(text: str, option: str, example: str) -> tuple[float, ...]:
     try:
-        weights = tuple(float(w) for w in text.split(","))
+        return tuple(float(w) for w in text.split(","))
     except ValueError as exc:
-        raise ConfigError(f"--data-weights must be comma-separated numbers like 1,1,2, got '{text}'") from exc
+        raise ConfigError(f"{option} must be comma-separated numbers like {example}, got '{text}'") from exc
+
+
+def _weights(text: str, folders: int) -> tuple[float, ...]:
+    weights = _numbers(text, "--data-weights", "1,1,2")
     if len(weights) != folders or min(weights) <= 0:
         raise ConfigError(f"--data-weights needs {folders} positive numbers, one per --data folder, got '{text}'")
     return weights
@@ -113,6 +138,9 @@ def run_viz(args: argparse.Namespace) -> int:
     scene = _scene_from_data(args) if args.data is not None else _scene_from_target(args)
     planner = Planner.load(args.model, temperature=args.temperature)
     request = PlanRequest(scene.context, scene.request_keyframes, (args.length,)).validated()
+    unreachable = request.unreachable()
+    if unreachable is not None:
+        print(f"warning: {unreachable}", file=sys.stderr)
     plans, _ = planner.sample(request, list(range(args.seeds)))
     rows = {f"seed {s}": p for s, p in enumerate(plans)}
     if scene.truth is not None:

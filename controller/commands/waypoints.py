@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 
@@ -12,3 +13,8 @@ class WorldWaypoint:
     x: float
     y: float
     heading_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "heading_deg"):  # a NaN target is never reached and an infinite one runs the policy off
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"waypoint {name} is {getattr(self, name)}: give finite numbers (x, y in m, heading_deg in degrees)")

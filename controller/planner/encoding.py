@@ -119,6 +119,23 @@ def request_channels(request: PlanRequest) -> tuple[FloatArray, FloatArray, Floa
     return np.array([*origin_xy, origin_yaw]), channels[:CONTEXT_FRAMES], values, mask
 
 
+def request_velocities(request: PlanRequest, origin: FloatArray) -> tuple[FloatArray, BoolArray] | None:
+    """Channel velocities and their mask [F, C] from the keyframes that carry a velocity; None when none does."""
+    given = [key for key in request.keyframes if key.velocity is not None]
+    if not given:
+        return None
+    velocities = np.zeros((FRAMES, ft.NUM_CHANNELS))
+    mask = np.zeros((FRAMES, ft.NUM_CHANNELS), dtype=bool)
+    for key in given:
+        assert key.velocity is not None
+        velocities[key.frame] = ft.channel_velocity(key.qpos, key.velocity, origin[:2], origin[2])
+        mask[key.frame, ft.JOINTS] = key.joints
+        mask[key.frame, [0, 1, ft.HEADING]] = key.root
+        mask[key.frame, ft.ROOT_Z] = key.root_height
+        mask[key.frame, ft.TILT] = key.root_height
+    return velocities, mask
+
+
 def joint_group_mask(rng: np.random.Generator) -> NDArray[np.bool_]:
     """A random subset of joint groups for a partial keyframe in training: legs, waist, arms, one arm."""
     mask = np.zeros(g1.NUM_JOINTS, dtype=bool)

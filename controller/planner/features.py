@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.planner.request import FPS
 from hw import g1, quat
 
 FloatArray = NDArray[np.float64]
@@ -69,15 +70,38 @@ def from_channels(channels: FloatArray, origin_xy: FloatArray, origin_yaw: Float
 # ---- anchors -------------------------------------------------------------------------------
 
 
-def anchor_curve(context: FloatArray, values: FloatArray, mask: NDArray[np.bool_]) -> tuple[FloatArray, FloatArray]:
+def anchor_curve(
+    context: FloatArray,
+    values: FloatArray,
+    mask: NDArray[np.bool_],
+    velocities: FloatArray | None = None,
+    velocity_mask: NDArray[np.bool_] | None = None,
+    fade_frames: float | None = None,
+    fade_root_xy: bool = True,
+    fade_delay: float = 0.0,
+) -> tuple[FloatArray, FloatArray]:
     """The curve the residual is added to, and the residual's window.
 
     context [..., 4, C] channels; values/mask [..., F, C]: constraint values at plan frames
-    0..F-1 where mask is set. Before the first constraint of a channel the curve is a
-    cubic Hermite from the context's last frame (with its velocity) to that constraint
-    (arriving with the chord's velocity); between constraints it is linear; after the last
-    one it holds, except a never-constrained root position or heading, which keeps the
-    context's velocity. Returns (curve [..., F, C], window [..., F, C] in [0, 1]).
+    0..F-1 where mask is set; velocities/velocity_mask [..., F, C]: optional channel
+    velocities (per frame) at constrained frames. Between two constraints of a channel the
+    curve is a cubic Hermite: it leaves the context's last frame with the context's
+    velocity, and a constraint with its given velocity; where no velocity is given it
+    takes the chord's (so between keyframes without velocities it is linear). With
+    `fade_frames`, what a velocity adds to the chord's fades as exp(-frames away / fade_frames):
+    matched at its end, it no longer carries a dance's momentary velocity across a long gap
+    (capture validation, MODEL_CARD.md); None keeps it over the whole segment. With
+    `fade_root_xy` False the root's horizontal velocity never fades: it is the body's momentum,
+    which a second of motion carries, where a dance's joints, heading and height turn within a
+    beat. The runtime keeps it only where a keyframe carries its velocity: then both ends of the
+    motion are known (held-out capture); in the loop a command may have changed since the
+    context, and momentum kept there made the root's path worse (docs/planner.md). With
+    `fade_delay`, a velocity is carried whole for that many frames from its end before it
+    fades: over a gap no longer than that the curve is the plain cubic Hermite, which a short
+    gap of capture follows better than a faded one (the runtime uses it where keyframes carry
+    velocities). After the
+    last constraint it holds, except a never-constrained root position or heading, which
+    keeps the context's velocity. Returns (curve [..., F, C], window [..., F, C] in [0, 1]).
     """
     frames = values.shape[-2]
     t = np.arange(frames, dtype=np.float64)[:, None]  # [F, 1]
@@ -90,10 +114,23 @@ def anchor_curve(context: FloatArray, values: FloatArray, mask: NDArray[np.bool_
     next_v = _take_at(values, np.where(has_next, next_t, 0.0), start)
     span = np.maximum(next_t - prev_t, 1.0)
     u = (t - prev_t) / span
-    # Hermite from (p0, slope v * span) to (p1, slope chord) is p0 + u^2 (2 - u) chord + u (1 - u)^2 v span; later segments are linear.
-    in_first = prev_t < 0
-    slope_part = np.where(in_first, u * (1.0 - u) ** 2 * span, 0.0) * velocity
-    inner = prev_v + np.where(in_first, u * u * (2.0 - u), u) * (next_v - prev_v) + slope_part
+    chord = (next_v - prev_v) / span
+    # What each end's velocity adds to the chord's slope (zero where none is given: the segment is linear there).
+    extra0 = np.where(prev_t < 0, velocity - chord, 0.0)
+    extra1: FloatArray | float = 0.0
+    if velocities is not None and velocity_mask is not None and velocity_mask.any():
+        given = velocity_mask & mask
+        at_prev = _take_at(np.where(given, velocities, np.nan), prev_t, velocity)
+        at_next = _take_at(np.where(given, velocities, np.nan), np.where(has_next, next_t, 0.0), velocity)
+        extra0 = np.where(np.isnan(at_prev), 0.0, at_prev - chord)
+        extra1 = np.where(np.isnan(at_next), 0.0, at_next - chord)
+    if fade_frames is not None:
+        fading = np.ones(values.shape[-1], dtype=bool)
+        fading[ROOT_XY] = fade_root_xy
+        extra0 = np.where(fading, extra0 * np.exp(-np.maximum(t - prev_t - fade_delay, 0.0) / fade_frames), extra0)
+        extra1 = np.where(fading, extra1 * np.exp(-np.maximum(next_t - t - fade_delay, 0.0) / fade_frames), extra1)
+    # Cubic Hermite from (p0, slope0) to (p1, slope1) over `span` frames: linear plus the slopes' departures from the chord.
+    inner = prev_v + u * (next_v - prev_v) + span * (u * (1.0 - u) ** 2 * extra0 + u * u * (u - 1.0) * extra1)
     drifting = np.zeros(values.shape[-1], dtype=bool)
     drifting[[0, 1, HEADING]] = True
     never = ~mask.any(axis=-2, keepdims=True) & drifting
@@ -102,6 +139,22 @@ def anchor_curve(context: FloatArray, values: FloatArray, mask: NDArray[np.bool_
     distance = np.minimum(t - prev_t, np.where(has_next, next_t - t, big))
     ramp = np.clip(distance / RAMP_FRAMES, 0.0, 1.0)
     return curve, ramp * ramp * (3 - 2 * ramp)
+
+
+def channel_velocity(qpos: FloatArray, qvel: FloatArray, origin_xy: FloatArray, origin_yaw: FloatArray) -> FloatArray:
+    """Channel velocities per frame [..., C] of frames `qpos` [..., 36] moving at `qvel` [..., 35] (MuJoCo layout, per second).
+
+    The frame one step of 1/30 s later is integrated (root linear velocity in the world, angular
+    velocity in the body frame, joints), and both go through `to_channels`: heading, tilt and
+    the canonical frame are handled as for any frame.
+    """
+    later = np.array(qpos, dtype=np.float64, copy=True)
+    step = np.asarray(qvel, dtype=np.float64) / FPS
+    later[..., g1.QPOS_ROOT_POS] += step[..., g1.QVEL_ROOT_LIN]
+    later[..., g1.QPOS_ROOT_QUAT] = quat.multiply(qpos[..., g1.QPOS_ROOT_QUAT], quat.exp(step[..., g1.QVEL_ROOT_ANG]))
+    later[..., g1.QPOS_JOINTS] += step[..., g1.QVEL_JOINTS]
+    both = to_channels(np.stack((qpos, later), axis=-2), origin_xy, origin_yaw)
+    return both[..., 1, :] - both[..., 0, :]
 
 
 def _take_at(values: FloatArray, frame: FloatArray, fallback: FloatArray) -> FloatArray:

@@ -2,12 +2,26 @@
 
 A sampled plan places each stance foot a few centimetres differently from frame to frame;
 on the robot that is foot skate. For each run of frames where the plan says a foot is in
-contact, the foot's horizontal position is pinned to where the run starts (to where the
-context left it, or to a keyframe's foot when the run holds one), and that leg's six joint
-angles are corrected by damped least squares on the foot position. Corrections fade in and
-out over a few frames at the run's ends and vanish at frames whose leg joints are
-constrained, so keyframes stay exact. Pure numpy: the leg chains (link offsets, rotations,
-joint axes of the G1) come from the model folder's spec, written at export from the MJCF.
+contact, the foot's horizontal position is pinned where the run lands (where the context left
+it, for a run from the plan's first frame), and that leg's six joint angles are corrected by
+damped least squares on the foot position. Two kinds of run are treated otherwise, measured on
+held-out capture (docs/planner.md):
+- a run that holds a keyframe's foot (or ends within its fade of one) goes from where it lands
+  to that foot in a straight line, then stays there: both ends are known, and pinning the whole
+  run to either one moved the foot by the distance between them at the other (by 0.4 m in one
+  frame, on a fencing lunge);
+- a run whose two known ends are further apart than a planted foot slides (MOVING_FOOT_MPS) is
+  a step the model took for a stance, and is left as planned.
+The context's own foot speed tells a swing only where the caller passes the context's
+second-to-last frame: the runtime does so where keyframes carry velocities, whose context is
+motion that was measured. A run from the plan's first frame whose foot left the context faster
+than a planted foot slides is then a step, left as planned. In the loop the context is the
+buffer being executed, whose feet a re-anchoring moves, and gating on it there left stance feet
+unpinned (walk_turn_stop's planned foot skate 0.074 -> 0.210 m/s).
+Corrections fade in and out over a few frames at the run's ends and vanish at frames whose leg
+joints are constrained, so keyframes stay exact. Pure numpy: the leg chains (link offsets,
+rotations, joint axes of the G1) come from the model folder's spec, written at export from the
+MJCF.
 """
 
 from __future__ import annotations
@@ -29,6 +43,9 @@ _POS, _ROT = g1.QPOS_ROOT_POS, g1.QPOS_ROOT_QUAT
 FADE_FRAMES = 3
 DAMPING = 0.02  # m: damped least squares keeps corrections small near a straight knee
 ITERATIONS = 1
+# A planted foot of retargeted capture slides at 0.09 m/s on average (bench inbetween's truth); a stance whose ends are
+# further apart than this speed allows (1 cm a frame at 30 fps) is a step.
+MOVING_FOOT_MPS = 0.3
 
 
 @dataclass(frozen=True)
@@ -71,30 +88,57 @@ class LegChains:
         return sole, np.stack(joints, axis=1), np.stack(world_axes, axis=1)
 
 
-def lock_feet(qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_last: FloatArray, fixed: BoolArray) -> FloatArray:
-    """Plans [S, N, 36] with stance feet pinned; `fixed` [N, 2] marks frames whose leg joints a keyframe constrains."""
+def sole_points(legs: LegChains, frames: FloatArray) -> FloatArray:
+    """Both soles' world points [T, 2, 3] (left, right) of frames [T, 36]."""
+    count = len(frames)
+    both = np.tile(np.array([0, 1]), count)
+    root_pos = np.repeat(frames[:, _POS], 2, axis=0)
+    root_rot = np.repeat(quat.to_matrix(frames[:, _ROT]), 2, axis=0)
+    q = frames[:, _LEGS_IN_QPOS].reshape(count * 2, 6)
+    return legs.forward(root_pos, root_rot, q, both)[0].reshape(count, 2, 3)
+
+
+def lock_feet(
+    qpos: FloatArray, contacts: BoolArray, legs: LegChains, context_last: FloatArray, fixed: BoolArray, fps: float,
+    context_before: FloatArray | None = None,
+) -> FloatArray:  # fmt: skip
+    """Plans [S, N, 36] with stance feet pinned; `context_last` [36] is the context's last frame, `fixed` [N, 2] marks
+    frames whose leg joints a keyframe constrains, `fps` the plan's frame rate. With `context_before` [36], the frame
+    before `context_last`, a run from the first frame whose foot was moving at the context's end is left as planned."""
     seeds, frames = qpos.shape[:2]
     both = np.array([0, 1])
     root_rot = quat.to_matrix(qpos[..., _ROT])  # [S, N, 3, 3]
-    # Every frame's and the context's soles in one pass: rows (seed, frame, leg) then the context's two legs.
-    rows_q = np.concatenate((qpos[..., _LEGS_IN_QPOS].reshape(-1, 2, 6).reshape(-1, 6), context_last[_LEGS_IN_QPOS].reshape(2, 6)))
-    rows_pos = np.concatenate((np.repeat(qpos[..., _POS].reshape(-1, 3), 2, axis=0), np.tile(context_last[_POS], (2, 1))))
-    rows_rot = np.concatenate((np.repeat(root_rot.reshape(-1, 3, 3), 2, axis=0), np.tile(quat.to_matrix(context_last[_ROT]), (2, 1, 1))))
-    rows_leg = np.concatenate((np.tile(both, seeds * frames), both))
+    # Every frame's soles and the context's last frame's in one pass: rows (seed, frame, leg), then the context's two legs.
+    rows_q = np.concatenate((qpos[..., _LEGS_IN_QPOS].reshape(-1, 6), context_last[_LEGS_IN_QPOS].reshape(2, 6)))
+    rows_pos = np.repeat(np.concatenate((qpos[..., _POS].reshape(-1, 3), context_last[None, _POS])), 2, axis=0)
+    rows_rot = np.repeat(np.concatenate((root_rot.reshape(-1, 3, 3), quat.to_matrix(context_last[None, _ROT]))), 2, axis=0)
+    rows_leg = np.tile(both, seeds * frames + 1)
     soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
     sole, context_sole = soles[:-2].reshape(seeds, frames, 2, 3), soles[-2:]
+    leaving = np.zeros(2, dtype=bool)  # a foot that was moving as the context ended: a run from frame 0 is a step
+    if context_before is not None:
+        before = sole_points(legs, context_before[None])[0]
+        leaving = np.linalg.norm(context_sole[:, :2] - before[:, :2], axis=-1) * fps > MOVING_FOOT_MPS
+    contacts = contacts.copy()
     target = sole.copy()
     for s in range(seeds):
         for side in (0, 1):
             for start, stop in _runs(contacts[s, :, side]):
-                anchors = np.flatnonzero(fixed[start:stop, side])
-                if len(anchors):
-                    anchor = sole[s, start + anchors[0], side, :2]
-                elif start == 0:
-                    anchor = context_sole[side, :2]
+                if start == 0 and leaving[side]:
+                    contacts[s, :stop, side] = False  # left as planned: no pin, no fade
+                    continue
+                landed = context_sole[side, :2] if start == 0 else sole[s, start, side, :2]
+                keyed = np.flatnonzero(fixed[start : stop + FADE_FRAMES, side])  # a keyframe in the run or its fade-out
+                if len(keyed):
+                    at = start + int(keyed[0])
+                    keyed_sole = sole[s, at, side, :2]
+                    if np.linalg.norm(keyed_sole - landed) * fps / max(at - start, 1) > MOVING_FOOT_MPS:
+                        continue  # the keyframe puts the foot further than a planted foot slides: a step, left as planned
+                    share = (np.arange(start, at + 1) - start) / max(at - start, 1)
+                    target[s, start : at + 1, side, :2] = landed + share[:, None] * (keyed_sole - landed)
+                    target[s, at:stop, side, :2] = keyed_sole
                 else:
-                    anchor = sole[s, start, side, :2]
-                target[s, start:stop, side, :2] = anchor
+                    target[s, start:stop, side, :2] = landed
     weight = _fade(contacts)
     weight[:, fixed] = 0.0
     active = weight > 0  # [S, N, 2]

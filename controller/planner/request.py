@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from controller.planner.plausibility import beyond_limits, out_of_reach
 from hw import g1, quat
 from hw.errors import G1Error
 
@@ -20,6 +21,7 @@ BoolArray = NDArray[np.bool_]
 
 FPS = 30.0
 QPOS_DIM = g1.QPOS_SIZE
+QVEL_DIM = g1.QVEL_SIZE
 CONTEXT_FRAMES = 4
 MIN_LENGTH, MAX_LENGTH, LENGTH_STEP = 24, 64, 4
 ALLOWED_LENGTHS = tuple(range(MIN_LENGTH, MAX_LENGTH + 1, LENGTH_STEP))
@@ -28,8 +30,14 @@ TEXT_ENCODER = "all-MiniLM-L6-v2"  # the sentence encoder whose embeddings fill 
 TEXT_EMBEDDING_DIM = 384  # its output size (controller.text.encoder.ENCODER_DIM)
 
 
+# A keyframe joint this far outside the G1's limits is refused. Not zero: poses stored as float32 (datasets, recordings)
+# put a joint at its limit up to a few 1e-7 rad beyond it (one value in the G1 Moves capture).
+KEYFRAME_LIMIT_TOLERANCE_RAD = 1e-4
+_QPOS_COLUMNS = ("root x", "root y", "root z", *(f"root quaternion {c}" for c in "wxyz"), *g1.JOINT_NAMES)  # what each qpos value is
+
+
 class PlanRequestError(G1Error, ValueError):
-    """A plan request that no planner can serve: wrong shapes, NaN, unknown mode, impossible length."""
+    """A plan request that no planner can serve: wrong shapes, NaN, unknown mode, impossible length, a keyframe beyond the limits."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +46,10 @@ class Keyframe:
 
     `joints` marks which of the 29 joint angles of `qpos` are constrained; `root` constrains
     the root's horizontal position and heading, `root_height` its height and tilt. The
-    defaults constrain the whole pose.
+    defaults constrain the whole pose. `velocity` optionally gives the pose's velocity at that
+    frame (MuJoCo `qvel` layout [35]: root linear velocity in the world, angular velocity in
+    the body frame, joint velocities; per second, as `controller.bench.baselines.finite_velocity`
+    builds it): the plan then arrives (and leaves) with it, on the channels the keyframe constrains.
     """
 
     frame: int
@@ -46,6 +57,7 @@ class Keyframe:
     joints: BoolArray = field(default_factory=lambda: np.ones(g1.NUM_JOINTS, dtype=bool))
     root: bool = True
     root_height: bool = True
+    velocity: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -81,13 +93,23 @@ class PlanRequest:
             joints = np.asarray(k.joints, dtype=bool)
             if joints.shape != (g1.NUM_JOINTS,):
                 raise PlanRequestError(f"keyframe joint mask must have {g1.NUM_JOINTS} entries, got shape {joints.shape}")
-            qpos = _finite_array(k.qpos, (QPOS_DIM,), f"keyframe {k.frame} qpos")
-            keyframes.append(Keyframe(k.frame, qpos, joints, k.root, k.root_height))
+            qpos = _keyframe_qpos(k.qpos, k.frame, joints)
+            velocity = None if k.velocity is None else _finite_array(k.velocity, (QVEL_DIM,), f"keyframe {k.frame} velocity")
+            keyframes.append(Keyframe(k.frame, qpos, joints, k.root, k.root_height, velocity))
         frames = [k.frame for k in keyframes]
         if len(set(frames)) != len(frames):
             raise PlanRequestError(f"two keyframes at the same frame: {sorted(frames)}; merge them into one")
         text = None if self.text_embedding is None else _finite_array(self.text_embedding, (TEXT_EMBEDDING_DIM,), "text embedding")
         return PlanRequest(context, tuple(sorted(keyframes, key=lambda k: k.frame)), tuple(self.lengths), self.mode, text, int(self.seed))
+
+    def unreachable(self) -> str | None:
+        """Why the first keyframe out of reach cannot be met at a speed the motion data shows; None when all can."""
+        for key in self.keyframes:
+            if key.root:
+                why = out_of_reach(self.context[-1], key.qpos[:2], key.frame, FPS, MAX_LENGTH)
+                if why is not None:
+                    return why
+        return None
 
     def plan_length(self) -> int:
         """The shortest allowed length that reaches past the last keyframe."""
@@ -105,24 +127,53 @@ def target_root(frame: int, x: float, y: float, heading: float) -> Keyframe:
 
 @dataclass(frozen=True)
 class Plan:
-    """The planner's answer: `qpos` [N, 36] at 30 fps, foot contacts [N, 2] (left, right), and its latency."""
+    """The planner's answer: `qpos` [N, 36] at 30 fps, foot contacts [N, 2] (left, right), and its latency.
+
+    `unreachable` says why a keyframe's root is further than the plan can carry it at a speed the motion data shows
+    (`plausibility.out_of_reach`); the plan still meets the keyframe, by a burst of speed nothing can follow. None: all
+    keyframes are within reach.
+    """
 
     qpos: FloatArray
     contacts: BoolArray
     latency_ms: float
+    unreachable: str | None = None
 
     @property
     def length(self) -> int:
         return len(self.qpos)
 
 
-def _finite_array(value: object, shape: tuple[int, ...], what: str) -> FloatArray:
+def _keyframe_qpos(value: object, frame: int, joints: BoolArray) -> FloatArray:
+    """The keyframe's qpos as float64, or PlanRequestError naming the frame and the first bad value: not finite, or a
+    constrained joint outside the G1's limits."""
+    qpos = _numeric(value, (QPOS_DIM,), f"keyframe {frame} qpos")
+    bad = np.flatnonzero(~np.isfinite(qpos))
+    if len(bad):
+        raise PlanRequestError(f"keyframe at frame {frame}: {_QPOS_COLUMNS[bad[0]]} is {qpos[bad[0]]}; send finite values")
+    outside = np.flatnonzero(joints & beyond_limits(qpos[g1.QPOS_JOINTS], KEYFRAME_LIMIT_TOLERANCE_RAD))
+    if len(outside):
+        joint = g1.G1_JOINTS[outside[0]]
+        lower, upper = joint.position_limits
+        raise PlanRequestError(
+            f"keyframe at frame {frame}: {joint.name} is {qpos[g1.QPOS_JOINTS][outside[0]]:.4f} rad, outside the G1's limits "
+            f"[{lower}, {upper}] (hw/g1.py); keep keyframe joints inside them"
+        )
+    return qpos
+
+
+def _numeric(value: object, shape: tuple[int, ...], what: str) -> FloatArray:
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise PlanRequestError(f"{what} is not numeric: {exc}") from exc
     if array.shape != shape:
         raise PlanRequestError(f"{what} must have shape {list(shape)}, got {list(array.shape)}")
+    return array
+
+
+def _finite_array(value: object, shape: tuple[int, ...], what: str) -> FloatArray:
+    array = _numeric(value, shape, what)
     if not np.isfinite(array).all():
         raise PlanRequestError(f"{what} holds NaN or infinite values; send finite frames")
     return array

@@ -48,6 +48,7 @@ class SmartLocomotion:
         self._count = 0
         self.path: RootTrajectory | None = None  # the root path of the latest request
         self.path_start = 0.0  # run time of the path's frame 0 is path_start + 1/fps
+        self._previous: tuple[RootTrajectory, float] | None = None  # the path before it, in force until its start
         self.library = GestureLibrary(cfg.gestures)
         self.gestures: tuple[Gesture, ...] = ()  # those in force (end inf) and those still blending out, by start
         self.text_embedding: FloatArray | None = None  # the planner's text conditioning (a text plan's clause), None: none
@@ -95,14 +96,15 @@ class SmartLocomotion:
         return True
 
     def path_velocity(self, t: float) -> VelocityCommand | None:
-        """The latest requested root path's velocity at run time `t`, in its heading frame (None: no path covers t)."""
-        if self.path is None:
-            return None
-        k = round((t - self.path_start) * FPS) - 1
-        if not 0 <= k < self.path.length:
-            return None
-        vx, vy = self.path.local_velocity(k)
-        return VelocityCommand(vx, vy, float(self.path.yaw_rates[k]))
+        """The requested root path's velocity at run time `t`, in its heading frame: the latest path's from its start, the
+        one before it until then (None: neither covers t)."""
+        latest = (self.path, self.path_start) if self.path is not None else None
+        for path, start in (p for p in (latest, self._previous) if p is not None):
+            k = round((t - start) * FPS) - 1
+            if 0 <= k < path.length:
+                vx, vy = path.local_velocity(k)
+                return VelocityCommand(vx, vy, float(path.yaw_rates[k]))
+        return None
 
     def _continued(self, measured: RootState, splice_time: float) -> RootState:
         """The spring's rates carried over from the previous path (where it covers `splice_time`), at the context's pose.
@@ -134,6 +136,7 @@ class SmartLocomotion:
             context = tilt_limited(context, math.radians(self.cfg.max_context_tilt_deg))
         state = self._continued(root_state_from_frames(context, FPS), splice_time)
         path = root_trajectory(state, self.command, self.cfg.plan_frames, self.cfg.spring, FPS)
+        self._previous = (self.path, self.path_start) if self.path is not None else None
         self.path, self.path_start = path, splice_time
         last = self.cfg.plan_frames - 1
         x, y = path.positions[last]

@@ -10,8 +10,12 @@ Every control tick calls `update(t, replan_now)`. The scheduler then
   changed (one plan in flight at a time), with the context read from the buffer being
   executed at the splice time, so the new plan continues what the robot will be doing.
 
-Plans run on a worker thread (onnxruntime releases the GIL), so a tick never waits for
-one on the real-time clock; its latency is the wall time from request to use. On the
+Plans run on a worker thread, or in a planner that takes requests on the caller's thread
+(`submit`: `PlannerProcess.submit`, the planner in a process of its own, as the real-time
+clock wants it: a plan in this process shares the interpreter lock with the loop), so a tick
+never waits for one on the real-time clock. A plan's latency is the wall time from its request
+to its return, stamped as it returns: the tick that takes it in comes up to a control period
+later, but the plan is used at its splice time whichever tick takes it in. On the
 simulated clock a plan becomes available a configured latency after its request, in
 simulated time, whatever the machine's speed: the loop waits for the worker right at the
 request (simulated time stands still meanwhile, and nothing else competes for the cores,
@@ -29,10 +33,11 @@ import math
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from controller.planner.plausibility import JOINT_LOWER, JOINT_UPPER, wild_frames
 from controller.planner.request import FPS, Plan, PlanRequest
 from controller.reference.buffer import ReferenceBuffer
 from hw import g1
@@ -80,18 +85,24 @@ class SchedulerCounters:
     replans: int = 0  # plans spliced into the buffer
     late_plans: int = 0  # plans that came back after their splice time: dropped
     planner_failures: int = 0  # raised, NaN, wrong shape, stalled
-    clamped_values: int = 0  # planned joint angles clamped to the limits
+    # Of every plan that came back finite and of the right shape, spliced or not (what the planner produced):
+    planned_frames: int = 0
+    joint_values_beyond_limits: int = 0  # joint angles outside the limits, before the clamp (all that the clamp changes)
+    wild_frames: int = 0  # frames beyond what the motion data ever shows (`plausibility.wild_frames`)
+    unreachable_targets: int = 0  # plans that say a keyframe was out of reach (`Plan.unreachable`)
 
 
 @dataclass(frozen=True)
 class _InFlight:
-    future: Future[Plan]
+    future: Future[tuple[Plan, float]]  # the plan and the wall time (perf_counter) it came back at
     requested_at: float  # run time of the request
     splice_time: float  # run time of the plan's first frame
     ready_at: float | None  # simulated clock: when the plan becomes available; None on the real-time clock
     submitted_wall: float
-    cost_s: float | None = None  # simulated clock: wall seconds the plan took (None: it stalled)
+    start: FloatArray  # the context's last frame: where the plan starts from
+    cost_s: float | None = None  # simulated clock: wall seconds until the wait for the plan ended (None: it stalled)
     crossfade_frames: int = 3  # how the plan is blended into the buffer at its splice
+    moves: list[Callable[[FloatArray], FloatArray]] = field(default_factory=list)  # buffer moves since the request
 
 
 class ReplanScheduler:
@@ -99,7 +110,9 @@ class ReplanScheduler:
 
     `make_request(context, splice_time)` builds the request for a plan whose frames follow
     `context` (the last 4 frames of the buffer at `splice_time`): the command, targets and
-    keyframes are the caller's. `joint_limits` (lower, upper) in joint order clamp every plan.
+    keyframes are the caller's. `joint_limits` (lower, upper) in joint order clamp every plan (None: none is clamped,
+    and joint values are counted against the G1's own limits). `submit`: the same planner taking a request on the
+    caller's thread and answering later (None: `plan` runs on the worker thread).
     """
 
     def __init__(
@@ -110,8 +123,10 @@ class ReplanScheduler:
         cfg: SchedulerConfig = SchedulerConfig(),
         simulated_clock: bool = True,
         joint_limits: tuple[FloatArray, FloatArray] | None = None,
+        submit: Callable[[PlanRequest], Future[Plan]] | None = None,
     ) -> None:
         self._plan = plan
+        self._submit = submit
         self._make_request = make_request
         self.buffer = buffer
         self.cfg = cfg
@@ -135,6 +150,17 @@ class ReplanScheduler:
         if self._in_flight is None and (replan_now or t >= self._next_request - 1e-9):
             self._request(t, self.cfg.crossfade_frames if crossfade_frames is None else crossfade_frames)
 
+    def move(self, transform: Callable[[FloatArray], FloatArray]) -> None:
+        """Move everything the buffer holds (`ReferenceBuffer.move`), and the plan in flight with it when it comes back.
+
+        That plan continues the context as it was at its request: spliced unmoved onto a moved
+        buffer, its crossfade would carry the reference across the move in 0.1 s (a 0.1 m
+        re-anchoring read as 1 m/s of extra speed).
+        """
+        self.buffer.move(transform)
+        if self._in_flight is not None:
+            self._in_flight.moves.append(transform)
+
     def _request(self, t: float, crossfade_frames: int) -> None:
         splice_time = t + self.cfg.lookahead_s
         try:
@@ -144,18 +170,18 @@ class ReplanScheduler:
             self._next_request = t + self.cfg.period_s
             return
         ready_at = t + self.cfg.simulated_latency_s if self.simulated_clock else None
+        submitted = time.perf_counter()
         try:
-            future = self._executor.submit(self._plan, request)
-        except RuntimeError as exc:  # the worker is gone (shut down under us): count it, plan on a fresh one next time
+            future = _stamped(self._submit(request) if self._submit is not None else self._executor.submit(self._plan, request))
+        except RuntimeError as exc:  # the worker (or the planner process) is gone: count it, plan on a fresh one next time
             self._fail(f"the planner worker is gone ({exc})")
             self._restart_worker()
             self._next_request = t + self.cfg.period_s
             return
-        submitted = time.perf_counter()
         cost = None
         if ready_at is not None and wait([future], timeout=self.cfg.stall_timeout_s).done:
             cost = time.perf_counter() - submitted
-        self._in_flight = _InFlight(future, t, splice_time, ready_at, submitted, cost, crossfade_frames)
+        self._in_flight = _InFlight(future, t, splice_time, ready_at, submitted, request.context[-1], cost, crossfade_frames)
         self.counters.requests += 1
         self._next_request = t + self.cfg.period_s
 
@@ -177,15 +203,18 @@ class ReplanScheduler:
                 self._restart_worker()
             return
         self._in_flight = None
-        self.plan_latencies_s.append(flight.cost_s if flight.cost_s is not None else time.perf_counter() - flight.submitted_wall)
         error = flight.future.exception()
         if error is not None:
+            self.plan_latencies_s.append(flight.cost_s if flight.cost_s is not None else time.perf_counter() - flight.submitted_wall)
             self._fail(f"the planner raised {type(error).__name__}: {error}")
             return
-        plan = flight.future.result()
-        frames = self._checked(plan)
+        plan, returned_wall = flight.future.result()
+        self.plan_latencies_s.append(returned_wall - flight.submitted_wall)
+        frames = self._checked(plan, flight.start)
         if frames is None:
             return
+        for transform in flight.moves:
+            frames = transform(frames)
         arrival = t if flight.ready_at is None else flight.ready_at
         if arrival > flight.splice_time + 1e-9:
             self.counters.late_plans += 1
@@ -199,7 +228,8 @@ class ReplanScheduler:
         self.buffer.splice(frames, flight.splice_time + 1.0 / FPS, flight.crossfade_frames)
         self.counters.replans += 1
 
-    def _checked(self, plan: Plan) -> FloatArray | None:
+    def _checked(self, plan: Plan, start: FloatArray) -> FloatArray | None:
+        """The plan's frames ready to splice, counted (limits, wild frames) and clamped; None when it is a failure."""
         frames = np.asarray(plan.qpos, dtype=np.float64)
         if frames.ndim != 2 or frames.shape[1] != g1.QPOS_SIZE or len(frames) == 0:
             self._fail(f"the planner returned frames of shape {list(frames.shape)}, expected [N, {g1.QPOS_SIZE}]")
@@ -207,14 +237,21 @@ class ReplanScheduler:
         if not np.isfinite(frames).all():
             self._fail("the planner returned NaN or infinite values")
             return None
+        c = self.counters
+        c.planned_frames += len(frames)
+        c.wild_frames += int(np.count_nonzero(wild_frames(frames, start)))
+        if plan.unreachable is not None:
+            c.unreachable_targets += 1
+            log.warning("plan asked for a target out of reach: %s", plan.unreachable)
+        joints = frames[:, g1.QPOS_JOINTS]
+        lower, upper = self._limits if self._limits is not None else (JOINT_LOWER, JOINT_UPPER)
+        clamped = np.clip(joints, lower, upper)
+        c.joint_values_beyond_limits += int(np.count_nonzero(clamped != joints))
         implausible = implausible_root(frames, self.cfg.max_root_tilt_deg, self.cfg.max_root_height_change_m)
         if implausible is not None:
             self._fail(f"the planner returned an implausible root: {implausible}")
             return None
         if self._limits is not None:
-            joints = frames[:, g1.QPOS_JOINTS]
-            clamped = np.clip(joints, self._limits[0], self._limits[1])
-            self.counters.clamped_values += int(np.count_nonzero(clamped != joints))
             frames[:, g1.QPOS_JOINTS] = clamped
         return frames
 
@@ -230,6 +267,23 @@ class ReplanScheduler:
 
     def close(self) -> None:
         self._executor.shutdown(wait=False, cancel_futures=True)
+
+
+def _stamped(future: Future[Plan]) -> Future[tuple[Plan, float]]:
+    """The plan and the wall time (perf_counter) it came back at, stamped where it comes back: the tick that takes it in may
+    come a control period later."""
+    stamped: Future[tuple[Plan, float]] = Future()
+
+    def returned(done: Future[Plan]) -> None:
+        if done.cancelled():
+            stamped.cancel()
+        elif (error := done.exception()) is not None:
+            stamped.set_exception(error)
+        else:
+            stamped.set_result((done.result(), time.perf_counter()))
+
+    future.add_done_callback(returned)
+    return stamped
 
 
 def implausible_root(frames: FloatArray, max_tilt_deg: float, max_height_change_m: float) -> str | None:

@@ -53,6 +53,9 @@ STOP_TIMEOUT_S = 10.0
 # or when every motor fell silent at once. Its age is measured on the send stamp, so a host held back itself is not fooled.
 STOPPED_AFTER_S = 0.1
 SILENT_AFTER_S = 0.015
+# A robot process killed is reaped only once the kernel has unmapped its memory (MuJoCo's): 50-70 ms after it went silent
+# on a slow 2-core machine. A silent process is given this long to end before it is called stopped rather than dead.
+EXIT_GRACE_S = 0.5
 WATCH_AFTER_CLOSE_S = 0.05  # the robot's motors take the host's last frames (damping, motor mode off) before it stops
 TRUTH_SIZE = 2 + g1.QPOS_SIZE + g1.QVEL_SIZE  # when it was sent (the machine's monotonic clock), time, qpos, qvel (float64)
 
@@ -109,9 +112,12 @@ class BusRobotProcess:
         tail = "; ".join(self.report.get("stderr_tail", [])) if self.report else ""
         raise HardwareFault(f"the robot process (g1ctl robot --buses) ended before it was ready ({self.ended()}): {tail or 'no message'}")
 
-    def ended(self) -> str | None:
-        """How the process ended ("exit code 3", "killed by SIGKILL"); None while it runs."""
-        code = self.process.poll()
+    def ended(self, within: float = 0.0) -> str | None:
+        """How the process ended ("exit code 3", "killed by SIGKILL"); None while it runs (after waiting `within` s)."""
+        try:
+            code = self.process.wait(within) if within > 0 else self.process.poll()
+        except subprocess.TimeoutExpired:
+            code = None
         if code is None:
             return None
         return f"killed by {signal.Signals(-code).name}" if code < 0 else f"exit code {code}"
@@ -178,6 +184,7 @@ class BusProcessBackend(PacedBusBackend):
         self.truth_time: float | None = None
         self._truth_sent: float | None = None  # when the robot sent its newest ground truth (the machine's monotonic clock)
         self._soft_start: float | None = None  # run time the robot's physics clock counts from (about)
+        self._trouble: str | None = None  # why the robot process is not there to answer, once found
         if faults is not None and faults.host.start_s is not None:
             self.robot: RobotInterface = FaultyCommands(host, faults.host, self._robot_time)
 
@@ -224,16 +231,23 @@ class BusProcessBackend(PacedBusBackend):
         return f"{cause}; {fault}" if (cause := self.process_trouble()) else fault
 
     def process_trouble(self) -> str | None:
-        """Why the robot process is not there to answer, if it is not: it ended, or it is alive and silent."""
+        """Why the robot process is not there to answer, if it is not: it ended, or it is alive and silent. Once found,
+        the cause is kept: a silent process was given `EXIT_GRACE_S` to end, so the wait is paid once."""
+        if self._trouble is not None:
+            return self._trouble
         name = f"the robot process (g1ctl robot --buses, pid {self.robot_process.pid})"
         ended = self.robot_process.ended()
-        if ended is not None:
-            return f"{name} died ({ended})"
-        self._follow_truth()
-        silent_s = time.monotonic() - self._truth_sent if self._truth_sent is not None else 0.0
-        if silent_s > STOPPED_AFTER_S or (silent_s > SILENT_AFTER_S and (self.host.store.missed > 0).all()):
-            return f"{name} stopped answering (no ground truth for {1e3 * silent_s:.0f} ms)"
-        return None
+        if ended is None:
+            self._follow_truth()
+            silent_s = time.monotonic() - self._truth_sent if self._truth_sent is not None else 0.0
+            if not (silent_s > STOPPED_AFTER_S or (silent_s > SILENT_AFTER_S and (self.host.store.missed > 0).all())):
+                return None
+            ended = self.robot_process.ended(within=EXIT_GRACE_S)
+            if ended is None:
+                self._trouble = f"{name} stopped answering (no ground truth for {1e3 * silent_s:.0f} ms)"
+                return self._trouble
+        self._trouble = f"{name} died ({ended})"
+        return self._trouble
 
     def report(self) -> dict[str, Any]:
         """The host's counters; once closed, the robot process's too, with its audit of every command its motors took."""

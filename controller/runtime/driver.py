@@ -41,7 +41,11 @@ from hw.errors import ConfigError, HardwareFault, MotorNotFoundError, RunAborted
 from hw.realtime import Scheduling, request_realtime
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+    from concurrent.futures import Future
+
     from controller.commands.velocity import CommandLimits
+    from controller.planner.request import Plan, PlanRequest
     from controller.reference.source import ReferenceSource
     from sim.robot import SimRobot
 
@@ -162,13 +166,12 @@ def _reference(
     follower = WaypointFollower(waypoints, limits=limits) if waypoints else None
     if not plan.planner:
         return WaypointReference(follower) if follower is not None else None
-    from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime session of the planner
     from controller.reference.planned import PlannedReference  # noqa: PLC0415
 
-    planner = Planner.load()
-    planner.warm_up()
+    simulated = plan.clock == "simulated"
+    plan_fn, submit = _planner(simulated, stack)
     planned = PlannedReference(
-        planner.plan, simulated_clock=plan.clock == "simulated", joint_limits=side.joint_limits, seed=plan.seed, follower=follower
+        plan_fn, simulated_clock=simulated, joint_limits=side.joint_limits, seed=plan.seed, follower=follower, submit=submit
     )
     stack.callback(planned.close)
     if hooks is None:
@@ -178,6 +181,22 @@ def _reference(
     wrapped = hooks.wrap_reference(planned, limits, truth)
     stack.callback(wrapped.close)
     return wrapped
+
+
+def _planner(simulated_clock: bool, stack: ExitStack) -> tuple[Callable[[PlanRequest], Plan], Callable[[PlanRequest], Future[Plan]] | None]:
+    """The planner's `plan` warmed up, and its `submit` where it has one: in this process on the simulated clock (the loop
+    waits for each plan, nothing competes), in a process of its own on the wall clock, asked from the tick's thread (a plan
+    beside the loop would share its interpreter lock, and a worker thread would have to be handed it to start one)."""
+    if simulated_clock:
+        from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime session of the planner
+
+        planner = Planner.load()
+        planner.warm_up()
+        return planner.plan, None
+    from controller.planner.process import PlannerProcess  # noqa: PLC0415
+
+    process = stack.enter_context(PlannerProcess())
+    return process.plan, process.submit
 
 
 def _world(side: BuiltBackend) -> SimRobot:

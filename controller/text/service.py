@@ -26,6 +26,7 @@ from controller.text.executor import TextRunConfig
 from controller.text.gesture_detector import detect_gestures
 from controller.text.program import Program
 from controller.text.resolve import describe_program, plan_program
+from hw.errors import ConfigError
 
 if TYPE_CHECKING:
     from controller.runtime.backend_registry import BackendChoice
@@ -49,8 +50,8 @@ class TextPlanner:
         return describe_program(program)
 
     def text_embedding(self, asked: bool | None = None) -> Any:
-        """Clause text -> the planner's text conditioning; None unless asked for (`asked`, default `condition_text`) and the
-        shipped planner was trained with text."""
+        """Clause text -> the planner's text conditioning; None unless asked for (`asked`, default `condition_text`).
+        Asked for with a shipped planner trained without text, it refuses (ConfigError) rather than plan without it."""
         if not (self.condition_text if asked is None else asked):
             return None
         import json  # noqa: PLC0415
@@ -58,7 +59,12 @@ class TextPlanner:
         from hw.shipped import model_dir  # noqa: PLC0415
 
         spec = json.loads((model_dir("planner") / "planner.json").read_text())
-        return self.encoder.embed_one if spec.get("text_conditioned") else None
+        if not spec.get("text_conditioned"):
+            raise ConfigError(
+                "the shipped planner was trained without text (models/planner/planner.json: text_conditioned false), so a "
+                "clause's text cannot condition it; leave out --text (models/planner/MODEL_CARD.md says why the slot was dropped)"
+            )
+        return self.encoder.embed_one
 
     def simulate(
         self, program: Program, seed: int = 0, policy: str = "fastsac", video: Path | None = None, report: Path | None = None,

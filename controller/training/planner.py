@@ -33,7 +33,9 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from controller.motion_data.dataset import MotionClip, load_dataset
+from controller.motion_data import styles
+from controller.motion_data.csv_import import resample_qpos
+from controller.motion_data.dataset import FPS, MotionClip, load_dataset
 from controller.motion_data.mirror import mirror_contacts, mirror_qpos
 from controller.planner import encoding as enc
 from controller.planner.request import TEXT_EMBEDDING_DIM, TEXT_ENCODER
@@ -50,7 +52,8 @@ SPEC_FILE = "planner.json"
 TEXT_TABLE = "text_table.npz"
 MODEL_KEYS = (  # a resumed run may change the rest (steps, threads, sampling)
     "batch", "lr", "width", "depth", "latent", "pca_windows", "seed", "data_weights", "mirror_imports", "text_dropout",
-    "text_variants", "free_share",
+    "text_variants", "free_share", "hold_out", "velocity_share", "velocity_fade_frames", "momentum_with_velocity",
+    "velocity_fade_delay_frames", "speed_factors",
 )  # fmt: skip
 Embed = Callable[[list[str]], np.ndarray]  # strings -> unit sentence embeddings [N, 384]
 
@@ -76,6 +79,18 @@ class TrainConfig:
     # Share of windows with no constraint at all (plans from the context and text alone). 0.1 cost 3 % of l2p on
     # held-out motion capture at 45 frames (validation, full runs); the text still moves unconstrained plans without.
     free_share: float = 0.0
+    # Clip name patterns (controller.motion_data.styles) left out of every split: the style validation is scored on.
+    hold_out: tuple[str, ...] = ()
+    velocity_share: float = 0.3  # windows whose keyframes carry their true velocity (Keyframe.velocity), when the data has it
+    # The anchor's velocity terms fade over this many frames (None: never); 16 chosen on capture validation (MODEL_CARD.md).
+    velocity_fade_frames: float | None = 16.0
+    # Windows whose keyframes carry their velocity keep the root's horizontal momentum in the anchor (features.anchor_curve).
+    momentum_with_velocity: bool = True
+    # ... and carry every velocity whole this many frames before it fades; 8 chosen on dance-B (MODEL_CARD.md).
+    velocity_fade_delay_frames: float = 8.0
+    speed_factors: tuple[float, ...] = ()  # imported clips also played this many times faster (e.g. 0.8, 1.25)
+    residual_gain: float = 1.0  # share of the learned residual the runtime adds to the anchor (planner.json)
+    velocity_residual_gain: float | None = None  # the same where a keyframe carries its velocity (None: residual_gain)
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.text_dropout <= 1.0:
@@ -84,6 +99,18 @@ class TrainConfig:
             raise ConfigError(f"text_variants must be at least 1, got {self.text_variants}")
         if any(not (w > 0 and math.isfinite(w)) for w in self.data_weights):
             raise ConfigError(f"data_weights must be positive numbers, got {list(self.data_weights)}")
+        if not 0.0 <= self.velocity_share <= 1.0:
+            raise ConfigError(f"velocity_share must be within 0..1, got {self.velocity_share}")
+        if self.velocity_fade_frames is not None and not self.velocity_fade_frames > 0:
+            raise ConfigError(f"velocity_fade_frames must be positive (or None: no fade), got {self.velocity_fade_frames}")
+        if not 0.0 <= self.velocity_fade_delay_frames < 64:
+            raise ConfigError(f"velocity_fade_delay_frames must be within 0..63 frames, got {self.velocity_fade_delay_frames}")
+        if any(not 0.5 <= k <= 2.0 for k in self.speed_factors):
+            raise ConfigError(f"speed_factors must be within 0.5..2 (times faster), got {list(self.speed_factors)}")
+        for name in ("residual_gain", "velocity_residual_gain"):
+            gain = getattr(self, name)
+            if gain is not None and not 0.0 <= gain <= 1.0:
+                raise ConfigError(f"{name} must be within 0..1, got {gain}")
 
     @property
     def text_conditioned(self) -> bool:
@@ -187,20 +214,32 @@ def train_planner(
     out_dir.mkdir(parents=True, exist_ok=True)
     if cfg.data_weights and len(cfg.data_weights) != len(data_dirs):
         raise ConfigError(f"{len(cfg.data_weights)} data weights for {len(data_dirs)} --data folders; give one per folder")
-    train_clips = _clips(data_dirs, "train", cfg.mirror_imports)
-    val_clips = _clips(data_dirs, "val", mirror=False)
+    held_out = _check_hold_out(data_dirs, cfg.hold_out)
+    train_clips = _clips(data_dirs, "train", cfg, augment=True)
+    val_clips = _clips(data_dirs, "val", cfg, augment=False)
     table = None
     if cfg.text_conditioned:
         captions = {text for group in train_clips + val_clips for clip in group for _, text in clip.captions}
         table = _text_table(out_dir / TEXT_TABLE, captions, cfg, embed)
     weights = cfg.data_weights or None
-    train = WindowSampler(train_clips, group_weights=weights, text=table, free_share=cfg.free_share)
-    val = WindowSampler(val_clips, group_weights=weights, text=table, free_share=cfg.free_share)
+    train, val = (
+        WindowSampler(
+            clips,
+            group_weights=weights,
+            text=table,
+            free_share=cfg.free_share,
+            velocity_share=cfg.velocity_share,
+            fade_frames=cfg.velocity_fade_frames,
+            momentum_with_velocity=cfg.momentum_with_velocity,
+            velocity_fade_delay=cfg.velocity_fade_delay_frames,
+        )
+        for clips in (train_clips, val_clips)
+    )
     checkpoint_path = out_dir / CHECKPOINT
     started = time.monotonic()
     if checkpoint_path.is_file():
         state = torch.load(checkpoint_path, weights_only=False)
-        changed = {k: state["config"][k] for k in MODEL_KEYS if state["config"][k] != getattr(cfg, k)}
+        changed = {k: state["config"].get(k) for k in MODEL_KEYS if state["config"].get(k) != getattr(cfg, k)}
         if changed:
             raise ConfigError(f"{checkpoint_path} holds a model with other settings {changed}; use a new --out or the same settings")
         codec, cond_stats, explained = state["codec"], state["cond_stats"], state["explained"]
@@ -265,6 +304,7 @@ def train_planner(
         "parameters": sum(p.numel() for p in net.parameters()),
         "text_strings": 0 if table is None else len(table.embeddings),
         "captions": 0 if table is None else len(table.rows),
+        "held_out_clips": held_out,
     }
     (out_dir / "training.json").write_text(
         json.dumps(summary | {"config": asdict(cfg), "data": [str(d) for d in data_dirs]}, indent=2) + "\n"
@@ -296,6 +336,13 @@ def export_onnx(out_dir: Path, net: FlowNet, codec: LatentCodec, cfg: TrainConfi
         "text_encoder": TEXT_ENCODER,
         "text_dim": TEXT_EMBEDDING_DIM,
         "text_conditioned": cfg.text_conditioned,
+        "keyframe_velocities": cfg.velocity_share > 0,
+        "velocity_fade_frames": cfg.velocity_fade_frames,
+        "momentum_with_velocity": cfg.momentum_with_velocity,
+        "velocity_fade_delay_frames": cfg.velocity_fade_delay_frames,
+        "residual_gain": cfg.residual_gain,
+        "velocity_residual_gain": cfg.residual_gain if cfg.velocity_residual_gain is None else cfg.velocity_residual_gain,
+        "held_out": list(cfg.hold_out),
         "legs": _leg_chains(),
     }
     (out_dir / SPEC_FILE).write_text(json.dumps(spec, indent=2) + "\n")
@@ -311,8 +358,9 @@ def _leg_chains() -> list[dict[str, Any]]:
     return leg_chain_specs(build_model(ensure_assets(quiet=True).g1_mjcf))
 
 
-def training_clips(clip: MotionClip, mirror: bool) -> list[TrainClip]:
-    """A dataset clip as training windows read it; an imported clip captioned from its name, and mirrored too if `mirror`."""
+def training_clips(clip: MotionClip, mirror: bool, speed_factors: tuple[float, ...] = ()) -> list[TrainClip]:
+    """A dataset clip as training windows read it; an imported clip captioned from its name, and (if asked)
+    mirrored and played at other speeds too."""
     captions = clip.captions
     imported = clip.source.startswith("csv:")
     if imported and not captions:
@@ -321,11 +369,41 @@ def training_clips(clip: MotionClip, mirror: bool) -> list[TrainClip]:
     if imported and mirror:
         mirrored = tuple((frame, mirror_caption(text)) for frame, text in captions)
         out.append(TrainClip(mirror_qpos(clip.qpos), mirror_contacts(clip.contacts).astype(np.float64), mirrored))
+    if imported:
+        out += [faster(c, k) for c in list(out) for k in speed_factors]
     return out
 
 
-def _clips(data_dirs: list[Path], split: str, mirror: bool) -> list[list[TrainClip]]:
-    groups = [[tc for c in load_dataset(d, split=split) for tc in training_clips(c, mirror)] for d in data_dirs]
+def faster(clip: TrainClip, factor: float) -> TrainClip:
+    """The clip played `factor` times faster (slower below 1), still at 30 fps: a style's other tempos."""
+    qpos = resample_qpos(clip.qpos, FPS * factor, FPS)
+    source = np.minimum(np.round(np.arange(len(qpos)) * factor).astype(np.int64), len(clip.qpos) - 1)
+    captions = tuple((round(frame / factor), text) for frame, text in clip.captions)
+    return TrainClip(qpos, clip.contacts[source], captions)
+
+
+def _check_hold_out(data_dirs: list[Path], patterns: tuple[str, ...]) -> list[str]:
+    """The names of the clips held out; ConfigError for a pattern that matches no clip (a typo holds nothing out)."""
+    if not patterns:
+        return []
+    names = [c.name for d in data_dirs for c in load_dataset(d)]
+    missing = styles.unmatched(names, patterns)
+    if missing:
+        known = ", ".join(styles.folder_prefixes(names))
+        raise ConfigError(f"--hold-out {','.join(missing)} matches no clip in {', '.join(map(str, data_dirs))}; their folders: {known}")
+    return [n for n in names if styles.matches(n, patterns)]
+
+
+def _clips(data_dirs: list[Path], split: str, cfg: TrainConfig, augment: bool) -> list[list[TrainClip]]:
+    groups = [
+        [
+            tc
+            for c in load_dataset(d, split=split)
+            if not styles.matches(c.name, cfg.hold_out)
+            for tc in training_clips(c, augment and cfg.mirror_imports, cfg.speed_factors if augment else ())
+        ]
+        for d in data_dirs
+    ]
     if not any(groups):
         raise ConfigError(f"no '{split}' clips in {', '.join(map(str, data_dirs))}; record one with 'g1ctl dataset record'")
     return groups

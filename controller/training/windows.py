@@ -61,12 +61,20 @@ class WindowSampler:
         group_weights: Sequence[float] | None = None,
         text: TextTable | None = None,
         free_share: float = 0.0,  # windows with no constraint at all: the context (and the text) alone decide the motion
+        velocity_share: float = 0.0,  # windows whose keyframes carry their true velocity, where the clip has the frame after
+        fade_frames: float | None = None,  # the anchor curve's velocity fade (features.anchor_curve)
+        momentum_with_velocity: bool = False,  # windows with keyframe velocities keep the root's horizontal momentum
+        velocity_fade_delay: float = 0.0,  # ... and carry their velocities whole this many frames before they fade
     ) -> None:
         if group_weights is not None and (len(group_weights) != len(groups) or min(group_weights, default=0.0) <= 0):
             raise ValueError(f"group_weights must be {len(groups)} positive numbers, one per group, got {list(group_weights)}")
         self.clips: list[TrainClip] = []
         self.text = text
         self.free_share = free_share
+        self.velocity_share = velocity_share
+        self.fade_frames = fade_frames
+        self.momentum_with_velocity = momentum_with_velocity
+        self.velocity_fade_delay = velocity_fade_delay
         weights: list[FloatArray] = []
         shares: list[float] = []
         for g, group in enumerate(groups):
@@ -90,6 +98,7 @@ class WindowSampler:
         qpos = np.empty((batch, span, 36))
         contacts = np.zeros((batch, enc.FRAMES, 2))
         length = np.empty(batch, dtype=np.int64)
+        real = np.empty(batch, dtype=np.int64)  # plan frames of each window that are the clip's, not padding
         captions: list[str | None] = []
         for b, index in enumerate(rng.choice(len(self.clips), size=batch, p=self._weights)):
             clip_q, clip_c, clip_captions = self.clips[index]
@@ -101,12 +110,20 @@ class WindowSampler:
             qpos[b, len(piece) :] = piece[-1]  # padding beyond the plan length is never used
             contacts[b, :n] = clip_c[start + CONTEXT_FRAMES : start + CONTEXT_FRAMES + n]
             length[b] = n
+            real[b] = len(piece) - CONTEXT_FRAMES
             captions.append(caption_in_force(clip_captions, start + CONTEXT_FRAMES, start + CONTEXT_FRAMES + n))
         origin_xy, origin_yaw = ft.frame_origin(qpos[:, CONTEXT_FRAMES - 1])
         channels = ft.to_channels(qpos, origin_xy, origin_yaw)
         context, truth = channels[:, :CONTEXT_FRAMES], channels[:, CONTEXT_FRAMES:]
         mask = random_constraints(rng, length, self.free_share)
-        curve, window = ft.anchor_curve(context, truth, mask)
+        velocities, velocity_mask = keyframe_velocities(rng, truth, mask, real, self.velocity_share)
+        curve, window = ft.anchor_curve(context, truth, mask, velocities, velocity_mask, self.fade_frames)
+        if (self.momentum_with_velocity or self.velocity_fade_delay > 0) and self.fade_frames is not None:
+            kept, _ = ft.anchor_curve(
+                context, truth, mask, velocities, velocity_mask, self.fade_frames, not self.momentum_with_velocity, self.velocity_fade_delay
+            )
+            given = np.asarray(velocity_mask.any(axis=(-2, -1)))
+            curve = np.where(given[:, None, None], kept, curve)  # as the runtime plans it
         if self.text is None:
             text, has_text = np.zeros((batch, TEXT_EMBEDDING_DIM)), np.zeros(batch, dtype=bool)
         else:
@@ -136,3 +153,17 @@ def random_constraints(rng: np.random.Generator, length: NDArray[np.int64], free
             if rng.random() < 0.3:
                 mask[b, frame, [0, 1, ft.HEADING]] = True
     return mask
+
+
+def keyframe_velocities(
+    rng: np.random.Generator, truth: FloatArray, mask: NDArray[np.bool_], real: NDArray[np.int64], share: float
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """True channel velocities [B, F, C] (the next frame's difference) at the constrained frames of `share` of the windows.
+
+    A frame gets one only where the clip holds the frame after it (`real` [B] plan frames are the clip's).
+    """
+    velocities = np.zeros_like(truth)
+    velocities[:, :-1] = truth[:, 1:] - truth[:, :-1]
+    has_next = np.arange(truth.shape[1])[None, :] + 1 < real[:, None]  # [B, F]
+    chosen = rng.random(len(truth)) < share
+    return velocities, mask & has_next[..., None] & chosen[:, None, None]

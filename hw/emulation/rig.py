@@ -17,6 +17,7 @@ import dataclasses
 import os
 import tty
 import uuid
+from collections.abc import Callable
 
 from can.interfaces.virtual import VirtualBus
 
@@ -112,12 +113,16 @@ class SimulatedHardware:
         return master, os.ttyname(slave)
 
     def serve(self, ready: list[int]) -> None:
-        """Served: answer what arrived on the ready ports, and send the delayed replies that are due."""
-        for fd in ready:
+        """Served: answer what arrived on the ready ports, and send the delayed replies that are due. RS-485 ports
+        first: a half-duplex bus sends its next command only once this reply is in, while a CAN bus sent all of its."""
+        for fd in sorted(ready, key=self._serial_first):
             self.ports[fd].serve()
         for emulator in self.emulators:
             if emulator.next_due() is not None:
                 emulator.flush_due()
+
+    def _serial_first(self, fd: int) -> bool:
+        return not isinstance(self.ports[fd], Rs485PortEmulator)
 
     def await_replies(self) -> None:
         """Returns once every frame sent to the CAN motors has been answered or its reply dropped (`HardwareRobot`'s hook)."""
@@ -125,10 +130,13 @@ class SimulatedHardware:
             if isinstance(emulator, MitBusEmulator):
                 emulator.wait_answered(ANSWER_TIMEOUT_S)
 
-    def step(self, physics: bool = True) -> None:
+    def step(self, physics: bool = True, between: Callable[[], None] | None = None) -> None:
         """One physics step: the motors' control step, physics, then fresh status and IMU frames (the IMU's readable by the host).
         `physics=False`: the same but for the physics (a robot that has not been given a command to hold yet stands still).
+        `between` (served): called between the step's parts, so that a frame that arrives meanwhile is answered within a
+        part's time, as a motor's firmware answers while its control loop runs, not after the whole step.
         Raises `EmulatorError` once an emulator's thread died: its motors would only go silent."""
+        pause = between if between is not None else _nothing
         for emulator in self.emulators:
             if emulator.error is not None:
                 exc = emulator.error
@@ -141,11 +149,14 @@ class SimulatedHardware:
             plan.update(now)  # faults held back to their start time
         for emulator in self.emulators:
             emulator.tick()
+            pause()
         step = getattr(self.plant, "step", None)
         if step is not None and physics:
             step()
+            pause()
         for emulator in self.emulators:
             emulator.sample()
+            pause()
         if self.imu is not None:
             self.imu.emit()
 
@@ -163,3 +174,7 @@ class SimulatedHardware:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _nothing() -> None:
+    return None

@@ -18,6 +18,7 @@ import pytest
 from controller.runtime.bus_process import BusRobotProcess
 from hw.errors import HardwareFault
 from hw.jointmap import load_hardware_config
+from hw.shipped import config_dir
 from hw.slcan import SlcanBus
 from tests.conftest import G1CTL, g1ctl, one_line_error, wait_for
 
@@ -50,7 +51,7 @@ def test_rs485_ports_and_slcan_adapters_of_the_mixed_robot(tmp_path: Path) -> No
     assert result.returncode == 0, result.stderr
     report = json.loads(report_path.read_text())
     hw = report["hw"]
-    assert report["falls"] == 0 and report["final_mode"] == "run" and hw["faults"] == 0 and hw["rate_hz"] == 250.0
+    assert report["falls"] == 0 and report["final_mode"] == "run" and hw["faults"] == 0 and hw["rate_hz"] == 125.0
     assert hw["robot_process"]["crc_errors"] == 0 and hw["robot_process"]["frames_in"] == hw["frames_sent"]
     assert hw["wire"]["outside_limits"] == 0 and hw["wire"]["commands"] > 500
 
@@ -68,8 +69,14 @@ def test_drills_run_through_the_robot_process_and_the_wire_audit_judges_them(tmp
 
 
 def test_the_rs485_drill_through_the_mixed_robot_process(tmp_path: Path) -> None:
-    result = g1ctl("sim", "--duration", "3.5", "--hardware", "sim-mixed-process", "--faults", "rs485-crc")
-    assert result.returncode == 0 and "drill rs485-crc: passed" in result.stdout, result.stdout + result.stderr
+    # The shipped drill states 30 ms for sim-mixed, whose buses cycle at 500 Hz. The mixed robot process cycles at 125 Hz:
+    # five cycles without a good reply and the damping cycle after them are 48 ms there, so this copy states 80 ms.
+    drill = (config_dir("faults") / "rs485-crc.yaml").read_text()
+    assert "within_s: 0.03," in drill
+    plan = tmp_path / "rs485-crc-125hz.yaml"
+    plan.write_text(drill.replace("within_s: 0.03,", "within_s: 0.08,"))
+    result = g1ctl("sim", "--duration", "3.5", "--hardware", "sim-mixed-process", "--faults", str(plan))
+    assert result.returncode == 0 and f"drill {plan}: passed" in result.stdout, result.stdout + result.stderr
 
 
 def robot_child(parent: int) -> int | None:

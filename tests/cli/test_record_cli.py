@@ -84,10 +84,18 @@ def start_recorded_run(record: Path, report: Path) -> subprocess.Popen[str]:
     args = ["sim", "--duration", "60", "--realtime", "--record", str(record), "--report", str(report)]
     process = subprocess.Popen([sys.executable, "-m", "controller.cli", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     # a few chunks on disk (one a second): the run is well under way
-    if not wait_for(lambda: record.exists() and record.stat().st_size > 150_000, timeout=6 * HANG_S):
+    if not wait_for(lambda: size_on_disk(record) > 150_000, timeout=6 * HANG_S):
         process.kill()
         pytest.fail(f"the recording did not grow: {process.communicate()}")
     return process
+
+
+def size_on_disk(path: Path) -> int:
+    """0 until the file is there: the run's start-up check creates the path and removes it again, so it may vanish."""
+    try:
+        return path.stat().st_size
+    except FileNotFoundError:
+        return 0
 
 
 @pytest.mark.slow

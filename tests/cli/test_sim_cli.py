@@ -115,6 +115,12 @@ def test_walking_through_the_planner_in_the_loop(tmp_path: Path) -> None:
     assert report["tracker"] == "decoupled" and report["falls"] == 0
     assert report["replans"] >= 35 and report["late_plans"] == 0 and report["planner_failures"] == 0
     assert set(report["plan_latency_ms"]) == {"p50", "p99"}
+    assert report["plan_resyncs_per_plan"] == round(report["plan_resyncs"] / report["replans"], 4)
+    spikes = report["plan_velocity_spikes"]
+    assert report["plan_velocity_spike_share"] == round(spikes / 199, 6)  # of the 199 steps between 200 ticks
+    assert report["plan_wild_frames"] == 0 and report["plan_unreachable_targets"] == 0  # walking at 0.5 m/s
+    assert spikes == 0 and report["plan_joint_values_beyond_limits"] == 0  # limits in the planner's output space
+    assert 0.0 < report["plan_foot_skate_mps"] < 0.5
     assert report["final_base_position"][0] > 0.5  # 3 s at up to 0.5 m/s forward, springing up to speed
     assert "unknown tracker 'wholebody'" in one_line_error(g1ctl("sim", "--planner", "--tracker", "wholebody"))
 

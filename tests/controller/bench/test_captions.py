@@ -94,3 +94,11 @@ def test_bad_settings_are_named() -> None:
     with pytest.raises(ConfigError, match="must include no text"):
         bc.validate(bc.CaptionConfig(captions=("walk forward",)))
     assert CONTEXT_FRAMES == 4
+
+
+def test_the_shipped_planner_without_text_has_no_caption_to_measure(capsys: pytest.CaptureFixture[str]) -> None:
+    from controller.cli.main import main
+
+    assert main(["bench", "caption", "--seeds", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "trained without text" in err and "--model" in err and len(err.splitlines()) == 1

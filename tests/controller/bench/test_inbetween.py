@@ -13,8 +13,9 @@ from controller.assets import Assets
 from controller.bench import baselines
 from controller.bench import inbetween as bi
 from controller.cli.main import main
+from controller.planner.plausibility import JOINT_LOWER, JOINT_UPPER
 from controller.planner.request import FPS
-from hw import g1
+from hw import g1, quat
 from hw.errors import ConfigError
 from sim.kinematics import G1Kinematics
 
@@ -42,6 +43,7 @@ def swaying_clip(name: str, frames: int) -> Clip:
     qpos = clip.qpos.copy()
     qpos[:, 1] += 0.1 * np.sin(2 * np.pi * 0.7 * t)
     qpos[:, 7:] += 0.3 * np.sin(2 * np.pi * 1.1 * t[:, None] + np.arange(g1.NUM_JOINTS))
+    qpos[:, 7:] = np.clip(qpos[:, 7:], JOINT_LOWER, JOINT_UPPER)  # a pose the planner takes as a keyframe
     return Clip(name, qpos)
 
 
@@ -90,9 +92,10 @@ def test_baselines_on_uniform_motion(kin: G1Kinematics) -> None:
         assert held["l2p"] > 0.05 and held["tgt_root_err"] > 0.1 and held["reach_success"] == 0.0
         assert held["root_jitter"] > report["results"]["interp"][length]["root_jitter"]  # the jump onto the target
         assert set(held) == {
-            "l2p", "l2q", "npss", "foot_skate", "joint_jitter", "root_jitter",
+            "l2p", "l2q", "npss", "foot_skate", "joint_jitter", "root_jitter", "wild_share", "beyond_limits_share",
             "tgt_keyframe_err", "tgt_root_err", "reach_success", "diversity",
         }  # fmt: skip
+        assert held["wild_share"] == 0.0 and held["beyond_limits_share"] == 0.0  # walking upright, joints near the default pose
     table = bi.format_table(report)
     assert "hermite" in table and "transition 12 frames, 8 windows" in table
     json.dumps(report)
@@ -119,6 +122,29 @@ def test_a_stochastic_method_gets_diversity_and_latency(kin: G1Kinematics, monke
     assert len(seen) == 8 + 3 * 10  # every window once, then 10 seeds on the first 3
     assert report["results"]["interp"]["10"]["l2p"] > 0.01  # the swaying is not linear
     assert "ours latency" in bi.format_table(report)
+
+
+def test_plausibility_counts_wild_frames_and_joints_beyond_the_limits(kin: G1Kinematics, monkeypatch: pytest.MonkeyPatch) -> None:
+    knee = g1.joint_indices(["left_knee_joint"], qpos=True)[0]
+
+    def implausible(config: bi.InbetweenConfig) -> bi.Method:
+        def predict(w: bi.Window, seed: int) -> np.ndarray:
+            out = np.vstack((baselines.interp(w.context, w.target, w.length), w.target))
+            out[2:4, knee] = 3.2  # two joint values beyond the limits
+            out[5, g1.QPOS_ROOT_QUAT] = quat.from_axis_angle([1.0, 0.0, 0.0], np.radians(80.0))  # one frame tilted past the data
+            out[-1, knee] = 3.2  # the frame at the target is not the transition's
+            return out
+
+        return bi.Method(predict)
+
+    monkeypatch.setitem(bi.METHODS, "ours", implausible)
+    report = bi.run_on_clips([uniform_clip("walk", 90)], cfg(methods=("ours", "interp"), lengths=(10,)), kin)
+    row = report["results"]["ours"]["10"]
+    assert row["wild_share"] == pytest.approx(1 / 10)
+    assert row["beyond_limits_share"] == round(2 / (10 * g1.NUM_JOINTS), 6)  # rounded as reported
+    assert report["results"]["interp"]["10"]["wild_share"] == 0.0
+    assert report["ground_truth"]["10"]["wild_share"] == 0.0 and report["ground_truth"]["10"]["beyond_limits_share"] == 0.0
+    assert "beyond lim" in bi.format_table(report)
 
 
 def test_method_and_length_parsing() -> None:
@@ -171,3 +197,33 @@ def test_cli_runs_baselines_on_a_dataset(tmp_path: Path, capsys: pytest.CaptureF
     report = json.loads(report_path.read_text())
     assert report["windows"] == {"15": 5} and report["clips"] == 1 and report["data"] == str(tmp_path / "data")
     assert report["results"]["interp"]["15"]["reach_success"] == 1.0
+
+
+def test_cli_scores_one_held_out_style_across_its_splits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from controller.motion_data.dataset import MotionClip, save_dataset
+
+    clips = [
+        MotionClip(name, swaying_clip(name, 80).qpos, np.zeros((80, 2), dtype=bool), split)
+        for name, split in (("dance-a", "test"), ("bonus-b", "train"), ("bonus-c", "val"))
+    ]
+    save_dataset(tmp_path / "data", clips, seed=0)
+    base = ["bench", "inbetween", "--data", str(tmp_path / "data"), "--methods", "interp", "--lengths", "15", "--windows", "500"]
+    report_path = tmp_path / "bonus.json"
+    assert main([*base, "--only", "bonus", "--split", "all", "--report", str(report_path)]) == 0
+    report = json.loads(report_path.read_text())
+    assert report["clips"] == 2 and report["only"] == ["bonus"] and report["windows"] == {"15": 2 * (80 - 4 - 15 - 2 + 1)}
+    assert "only bonus" in capsys.readouterr().out
+    assert main([*base, "--split", "all"]) == 2
+    assert "give --only with the style it was trained without" in capsys.readouterr().err
+    assert main([*base, "--only", "jazz", "--split", "all"]) == 2
+    assert "--only jazz matches no clip in" in capsys.readouterr().err
+
+
+def test_windows_whose_target_is_beyond_the_limits_are_not_drawn() -> None:
+    """A recorded pose can pass a limit (MuJoCo's soft limits); the planner refuses it as a keyframe, so no window ends there."""
+    clip = swaying_clip("a", 60)
+    qpos = clip.qpos.copy()
+    qpos[30:40, 7 + 3] = JOINT_UPPER[3] + 0.02  # the left knee 0.02 rad past its limit for 10 frames
+    windows = bi.draw_windows([Clip("a", qpos)], length=5, count=1000, seed=0)
+    targets = {w.start + 4 + 5 for w in windows}
+    assert len(windows) == 60 - (4 + 5 + 2) + 1 - 10 and not targets & set(range(30, 40))

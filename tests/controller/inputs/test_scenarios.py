@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from controller.commands.velocity import CommandLimits
@@ -40,3 +42,14 @@ def test_scripted_source_holds_each_step_until_the_next() -> None:
     assert source.poll(1.0).velocity.vx == 0.3  # clamped to the limits
     assert source.poll(6.0).velocity.yaw_rate == 0.6
     assert source.poll(19.9).velocity.is_zero()
+
+
+@pytest.mark.parametrize(("value", "key"), [(".nan", "x"), (".inf", "y"), ("-.inf", "heading_deg")])
+def test_a_waypoint_that_is_not_finite_is_refused_naming_it(value: str, key: str, tmp_path: Path) -> None:
+    pose = {"x": "1.0", "y": "0.0", "heading_deg": "0.0"} | {key: value}
+    path = tmp_path / "bad.yaml"
+    path.write_text("duration: 10\nwaypoints:\n  - {x: 0.5, y: 0.0}\n  - {" + ", ".join(f"{k}: {v}" for k, v in pose.items()) + "}\n")
+    with pytest.raises(ConfigError) as caught:
+        load_scenario(str(path))
+    message = str(caught.value)
+    assert "waypoints[1]" in message and f"waypoint {key} is" in message and "\n" not in message

@@ -90,3 +90,52 @@ def test_request_validation_names_the_problem() -> None:
     for message, request in cases.items():
         with pytest.raises(PlanRequestError, match=message.replace("[", r"\[").replace("]", r"\]")):
             request.validated()
+
+
+def test_a_keyframe_velocity_makes_the_anchor_the_hermite_baseline() -> None:
+    from controller.bench import baselines
+
+    walk = turning_walk(60)
+    target, after, length = walk[4 + 30], walk[4 + 31], 30
+    velocity = baselines.finite_velocity(target, after)
+    request = PlanRequest(walk[:4], (Keyframe(length, target, velocity=velocity),), lengths=(32,)).validated()
+    origin, context, values, mask = enc.request_channels(request)
+    given = enc.request_velocities(request, origin)
+    assert given is not None and given[1][length].all() and not given[1][length - 1].any()
+    # The channel velocity of the true next frame is the channels' own difference.
+    truth = ft.to_channels(walk[4 + length : 4 + length + 2], origin[:2], origin[2])
+    assert np.allclose(given[0][length], truth[1] - truth[0], atol=1e-9)
+    curve, _ = ft.anchor_curve(context, values, mask, *given)
+    hermite = baselines.hermite(walk[:4], target, length, velocity)
+    planned = ft.from_channels(curve[:length], origin[:2], origin[2])
+    assert np.allclose(planned[:, 7:], hermite[:, 7:], atol=1e-9) and np.allclose(planned[:, :3], hermite[:, :3], atol=1e-9)
+    plain, _ = ft.anchor_curve(context, values, mask)
+    assert np.abs(plain - curve)[: length - 1, ft.JOINTS].max() > 1e-3  # without it the curve arrives along the chord
+    faded, _ = ft.anchor_curve(context, values, mask, *given, fade_frames=4.0)
+    assert np.allclose(faded[length], values[length]) and np.allclose(
+        faded[length] - faded[length - 1], curve[length] - curve[length - 1], atol=0.02
+    )
+    mid = length // 2  # far from both ends the faded velocities add little to the chord's straight line
+    chord = context[-1] + (mid + 1) / (length + 1) * (values[length] - context[-1])
+    assert np.abs(faded[mid] - chord).max() < 0.2 * np.abs(curve[mid] - chord).max()
+    # Keeping the root's momentum: the horizontal root follows the unfaded curve, every other channel the faded one.
+    momentum, _ = ft.anchor_curve(context, values, mask, *given, fade_frames=4.0, fade_root_xy=False)
+    assert np.allclose(momentum[:, ft.ROOT_XY], curve[:, ft.ROOT_XY]) and np.allclose(momentum[:, 2:], faded[:, 2:])
+    assert np.abs(faded - curve)[:length, ft.ROOT_XY].max() > 1e-3
+    # A fade delay carries each velocity whole that many frames from its end: over a gap no longer, the plain Hermite.
+    delayed, _ = ft.anchor_curve(context, values, mask, *given, fade_frames=4.0, fade_delay=length + 1.0)
+    assert np.allclose(delayed, curve)
+    assert np.array_equal(ft.anchor_curve(context, values, mask, *given, fade_frames=4.0, fade_delay=0.0)[0], faded)
+    # The context's velocity alone (no keyframe velocity): whole for the first 8 frames after the context, then fading.
+    short, _ = ft.anchor_curve(context, values, mask, fade_frames=4.0, fade_delay=8.0)
+    assert np.allclose(short[:8], plain[:8]) and np.abs(short[12:length] - plain[12:length]).max() > 1e-3
+
+
+def test_keyframe_velocity_is_validated() -> None:
+    walk = turning_walk(10)
+    for bad, message in (
+        (np.zeros(34), r"keyframe 5 velocity must have shape \[35\]"),
+        (np.full(35, np.nan), "keyframe 5 velocity holds NaN"),
+    ):
+        with pytest.raises(PlanRequestError, match=message):
+            PlanRequest(walk[:4], (Keyframe(5, walk[9], velocity=bad),)).validated()

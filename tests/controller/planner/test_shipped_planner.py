@@ -9,6 +9,7 @@ from controller.planner.request import Keyframe, PlanRequest, target_root
 from controller.planner.runtime import Planner
 from hw import g1, quat
 from hw.shipped import model_dir
+from tests.conftest import turning_walk
 
 pytestmark = pytest.mark.skipif(not (model_dir("planner") / "planner.onnx").is_file(), reason="no shipped planner model")
 
@@ -39,3 +40,49 @@ def test_arm_keyframe_is_met_and_seeds_differ() -> None:
     arm_columns = g1.joint_slice(g1.ARM_JOINTS, qpos=True)
     assert np.allclose(plans[:, 20, arm_columns], pose[arm_columns])
     assert np.ptp(plans[:, 25:, :2], axis=0).max() > 1e-3  # generative: the seeds disagree where nothing is constrained
+
+
+def test_a_keyframe_with_its_velocity_takes_the_velocity_gain(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import json
+    import shutil
+
+    folder = tmp_path / "planner"
+    shutil.copytree(model_dir("planner"), folder)
+    spec = json.loads((folder / "planner.json").read_text())
+    (folder / "planner.json").write_text(json.dumps(spec | {"residual_gain": 1.0, "velocity_residual_gain": 0.0}))
+    target = _standing()[-1].copy()
+    target[:2] += (0.4, 0.1)
+    moving = np.zeros(35)
+    moving[0] = 0.8  # m/s forward at the target
+    with_velocity = PlanRequest(_standing(), (Keyframe(30, target, velocity=moving),), lengths=(32,), seed=0)
+    plain = PlanRequest(_standing(), (Keyframe(30, target),), lengths=(32,), seed=0)
+    both = Planner.load(folder, foot_lock=False)
+    assert (both.residual_gain, both.velocity_residual_gain) == (1.0, 0.0)
+    assert np.allclose(both.plan(with_velocity).qpos, Planner.load(folder, foot_lock=False, residual_gain=0.0).plan(with_velocity).qpos)
+    assert np.allclose(both.plan(plain).qpos, Planner.load(folder, foot_lock=False, residual_gain=1.0).plan(plain).qpos)
+    assert not np.allclose(both.plan(plain).qpos, Planner.load(folder, foot_lock=False, residual_gain=0.0).plan(plain).qpos)
+    unset = spec.copy()
+    unset.pop("velocity_residual_gain", None)
+    (folder / "planner.json").write_text(json.dumps(unset | {"residual_gain": 0.5}))
+    assert Planner.load(folder).velocity_residual_gain == 0.5  # a model without its own velocity gain uses the other
+
+
+def test_the_fade_delay_and_the_context_feet_apply_only_where_keyframes_carry_velocities(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The loop and text plans give no keyframe velocities: their plans do not depend on either."""
+    import json
+    import shutil
+
+    folder = tmp_path / "planner"
+    shutil.copytree(model_dir("planner"), folder)
+    spec = json.loads((folder / "planner.json").read_text())
+    assert spec["velocity_fade_delay_frames"] == 8.0  # chosen on dance-B (MODEL_CARD.md)
+    walk = turning_walk(40)
+    moving = np.zeros(35)
+    moving[0] = 0.6
+    with_velocity = PlanRequest(walk[:4], (Keyframe(30, walk[34], velocity=moving),), lengths=(32,), seed=0)
+    plain = PlanRequest(walk[:4], (Keyframe(30, walk[34]),), lengths=(32,), seed=0)
+    shipped = Planner.load(folder)
+    (folder / "planner.json").write_text(json.dumps(spec | {"velocity_fade_delay_frames": 0.0}))
+    undelayed = Planner.load(folder)
+    assert np.array_equal(shipped.plan(plain).qpos, undelayed.plan(plain).qpos)
+    assert not np.allclose(shipped.plan(with_velocity).qpos, undelayed.plan(with_velocity).qpos)

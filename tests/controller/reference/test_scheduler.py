@@ -14,7 +14,7 @@ from controller.planner.runtime import Planner
 from controller.reference.buffer import ReferenceBuffer
 from controller.reference.locomotion import SmartLocomotion
 from controller.reference.scheduler import ReplanScheduler, SchedulerConfig
-from hw import g1
+from hw import g1, quat
 from hw.errors import ConfigError
 from hw.shipped import model_dir
 from tests.conftest import HANG_S, wait_for
@@ -143,13 +143,63 @@ def test_a_plan_slower_than_its_lookahead_is_late_on_the_real_time_clock(planner
     scheduler.close()
 
 
-def test_plans_are_clamped_to_the_joint_limits(planner: Planner) -> None:
+def test_plans_are_clamped_to_the_joint_limits_and_what_was_beyond_them_is_counted(planner: Planner) -> None:
     lower, upper = np.full(g1.NUM_JOINTS, -0.05), np.full(g1.NUM_JOINTS, 0.05)
-    scheduler, buffer = make(planner.plan, limits=(lower, upper))
+    beyond = {"n": 0}
+
+    def plan(request: PlanRequest) -> Plan:
+        good = planner.plan(request)
+        joints = good.qpos[:, g1.QPOS_JOINTS]
+        beyond["n"] += int(((joints < lower) | (joints > upper)).sum())
+        return good
+
+    scheduler, buffer = make(plan, limits=(lower, upper))
     run_ticks(scheduler, 1.0)
-    assert scheduler.counters.clamped_values > 0
+    assert scheduler.counters.joint_values_beyond_limits == beyond["n"] > 0  # every plan that came back, before the clamp
     joints = buffer.sample(1.0).qpos[g1.QPOS_JOINTS]
     assert (joints >= -0.05 - 1e-9).all() and (joints <= 0.05 + 1e-9).all()
+    scheduler.close()
+
+
+def test_wild_frames_and_targets_out_of_reach_are_counted_on_every_plan(planner: Planner) -> None:
+    calls = {"n": 0}
+
+    def plan(request: PlanRequest) -> Plan:
+        calls["n"] += 1
+        good = planner.plan(request)
+        if calls["n"] % 2:
+            return good
+        bad = np.array(good.qpos)
+        bad[30:35, g1.QPOS_ROOT_QUAT] = quat.from_axis_angle([0.0, 1.0, 0.0], np.radians(70.0))  # wild, short of a failure
+        return Plan(bad, good.contacts, good.latency_ms, unreachable="the keyframe at frame 43 is 10.00 m away")
+
+    scheduler, _ = make(plan)
+    run_ticks(scheduler, 2.0)
+    c = scheduler.counters
+    assert c.planner_failures == 0 and c.requests >= 20 and c.planned_frames == 44 * (c.replans + c.late_plans)
+    assert c.wild_frames == 5 * (c.requests // 2) and c.unreachable_targets == c.requests // 2
+    scheduler.close()
+
+
+def test_a_plans_latency_on_the_real_time_clock_ends_when_it_is_back_not_when_a_tick_takes_it(planner: Planner) -> None:
+    back = threading.Event()
+
+    def plan(request: PlanRequest) -> Plan:
+        good = planner.plan(request)
+        back.set()
+        return good
+
+    buffer = ReferenceBuffer()
+    buffer.reset(np.array(g1.standing_qpos()), 0.0)
+    scheduler = ReplanScheduler(plan, SmartLocomotion().request, buffer, SchedulerConfig(), simulated_clock=False)
+    asked = time.perf_counter()
+    scheduler.update(0.0)
+    assert back.wait(HANG_S)
+    time.sleep(0.2)  # the next control tick comes late
+    taken = time.perf_counter()
+    scheduler.update(0.02)
+    assert scheduler.counters.replans == 1 and len(scheduler.plan_latencies_s) == 1
+    assert scheduler.plan_latencies_s[0] < taken - asked - 0.2  # the wait for the tick is not the plan's
     scheduler.close()
 
 

@@ -166,11 +166,11 @@ def test_the_planned_reference_gives_the_legs_the_robots_command_and_the_planner
     finally:
         ref.close()
     resynced = PlannedReference(hold_pose, follower=follower((1.5, 0.0, 0.0)))
-    try:  # with the default resync the plan is moved onto the robot: both are 0.3 m short
+    try:  # with the default resync the plan is moved towards the robot, tick by tick, until it is on it
         resynced.start(state(0.0, 0.0, 0.0))
-        resynced.window(state(0.02, 1.2, 0.0), VelocityCommand())
+        xs = [resynced.window(state(0.02 * k, 1.2, 0.0), VelocityCommand()).plan.qpos[0] for k in range(100)]  # type: ignore[union-attr]
         assert resynced.report()["plan_resyncs"] == 1
-        assert resynced.buffer.sample(0.02).qpos[0] == pytest.approx(1.2)
+        assert 0.0 < xs[5] < 0.1 and xs[-1] == pytest.approx(1.2, abs=0.02)  # no jump: under 1 m/s
     finally:
         resynced.close()
 

@@ -130,8 +130,11 @@ def test_a_real_g1_is_opened_listening_and_released_at_the_first_command(tmp_pat
     pytest.importorskip("cyclonedds", reason="the g1 extra (cyclonedds) is not installed")
     domain = claim_dds_domain()
     config = a_robot_config(tmp_path, domain)
-    # The stand-in is a Python process stepping MuJoCo: on a loaded machine its states pause longer than a real G1's.
-    config.write_text(config.read_text().replace("state_timeout: 0.05", "state_timeout: 0.25"))
+    # The stand-in is a Python process stepping MuJoCo: on a loaded machine its states pause longer than a real G1's,
+    # and it is started together with the bring-up, loading MuJoCo first, where a real G1 is up before anyone connects.
+    text = config.read_text().replace("state_timeout: 0.05", "state_timeout: 0.25")
+    config.write_text(text.replace("connect_timeout: 2.0", "connect_timeout: 30.0"))
+    assert "connect_timeout: 30.0" in config.read_text()
     command = [sys.executable, "-m", "controller.cli", "robot", "--dds", "--gantry", "--domain", str(domain), "--duration", "60"]
     stand_in = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

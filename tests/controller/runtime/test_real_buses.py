@@ -41,7 +41,11 @@ def without_imu(cfg: HardwareConfig) -> HardwareConfig:
 @pytest.mark.slow
 def test_real_buses_cycle_at_the_configured_rate_on_the_wall_clock() -> None:
     cfg = without_imu(load_hardware_config("sim-mixed"))  # RS-485 on pseudo-terminals, CAN on virtual channels
-    cfg = dataclasses.replace(cfg, cycle_hz=250.0, safety=dataclasses.replace(cfg.safety, soft_start_time=0.2))
+    # RS-485 answered by emulator threads of this process is slow: with a 3 ms wait the ankles (last of six motors a
+    # port) missed five replies in a row, and with 6 ms a cycle took 8 ms at the median (2026-12-02, a slow machine).
+    # At 100 Hz with that wait a cycle ends inside its period, so the period measured is the pacer's alone.
+    safety = dataclasses.replace(cfg.safety, soft_start_time=0.2, cycle_timeout=0.006)
+    cfg = dataclasses.replace(cfg, cycle_hz=100.0, safety=safety)
     plant = StaticPlant(dict(zip(g1.JOINT_NAMES, g1.default_joint_vector(), strict=True)))
     with SimulatedHardware(cfg, plant) as rig:
         real = dataclasses.replace(rig.host_config, simulated=False)  # the emulators' interfaces, opened as a real robot's
@@ -57,13 +61,13 @@ def test_real_buses_cycle_at_the_configured_rate_on_the_wall_clock() -> None:
             assert backend.fault() is None
         report = backend.report()
     period, pacer = report["cycle_period_ms"], backend.pacer
-    assert report["rate_hz"] == 250.0 and period["target"] == 4.0
-    assert abs(period["p50"] - 4.0) < 0.2, report  # on its grid: the median period is the target's however loaded
-    # Every 4 ms slot from the first cycle to the last had a cycle or was counted as missed.
+    assert report["rate_hz"] == 100.0 and period["target"] == 10.0
+    assert abs(period["p50"] - 10.0) < 0.2, report  # on its grid: the median period is the target's however loaded
+    # Every 10 ms slot from the first cycle to the last had a cycle or was counted as missed.
     slots = round(sum(pacer.periods) / pacer.period) + 1
     assert abs(pacer.cycles + pacer.missed - slots) <= 1 and report["missed_cycles"] == pacer.missed
     # Replies that miss a cycle happen here (emulator threads share this process), never five in a row: no fault.
-    assert pacer.cycles > 200 and report["faults"] == 0 and report["frames_received"] > 0 and report["state"] == "closed"
+    assert pacer.cycles > 90 and report["faults"] == 0 and report["frames_received"] > 0 and report["state"] == "closed"
 
 
 def a_real_robot_config(tmp_path: Path, buses: dict[str, str]) -> Path:

@@ -142,3 +142,22 @@ def test_training_clips_caption_and_mirror_imports() -> None:
     assert len(training_clips(imported, mirror=False)) == 1
     recorded = MotionClip("rec-1", qpos, contacts, "train", captions=((0, "turn left in place"),))
     assert [c.captions for c in training_clips(recorded, mirror=True)] == [((0, "turn left in place"),)]  # recorded: never mirrored
+
+
+def test_windows_with_keyframe_velocities_keep_the_roots_momentum_as_the_runtime_does() -> None:
+    walk = _clip(300, (), 0)
+    draws = {
+        keep: WindowSampler([[walk]], velocity_share=0.5, fade_frames=16.0, momentum_with_velocity=keep).sample(
+            np.random.default_rng(3), 64
+        )
+        for keep in (False, True)
+    }
+    moved = np.abs(draws[True].curve - draws[False].curve).max(axis=(1, 2)) > 1e-9
+    assert 0 < moved.sum() < len(moved)  # about half the windows carry velocities; only theirs changed
+    assert np.array_equal(draws[True].curve[~moved], draws[False].curve[~moved])
+    changed = np.abs(draws[True].curve - draws[False].curve)[moved]
+    assert changed[..., 2:].max() < 1e-9 and changed[..., :2].max() > 1e-4  # the root's horizontal channels alone
+    # A fade delay changes the same windows, on every channel that fades.
+    delayed = WindowSampler([[walk]], velocity_share=0.5, fade_frames=16.0, velocity_fade_delay=8.0).sample(np.random.default_rng(3), 64)
+    by_delay = np.abs(delayed.curve - draws[False].curve).max(axis=(1, 2)) > 1e-9
+    assert np.array_equal(by_delay, moved) and np.abs(delayed.curve - draws[False].curve)[moved][..., 2:].max() > 1e-4
