@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -34,6 +35,12 @@ if TYPE_CHECKING:
     from controller.reference.window import ReferenceWindow
 
 ROOT = Path(__file__).resolve().parent.parent  # the repository
+
+# A suite started in the background without job control (`.ci/run &`, nohup) inherits SIGINT ignored, and an ignored
+# signal stays ignored across exec: the runs that tests stop with Ctrl-C would not stop. A handled one is reset to the
+# default in the runs started from here.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session", autouse=True)
