@@ -17,23 +17,42 @@ FloatArray = NDArray[np.float64]
 _EPS = 1e-12
 
 
+# These functions run on a planner's few dozen frames many times a plan: they take components by indexing and fill their
+# output in place, where np.moveaxis and np.stack would cost more than the arithmetic (same values, bit for bit).
+
+
+def _components(q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """w, x, y, z of q [..., 4], as views."""
+    return q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+
+
+def _stacked(*parts: FloatArray) -> FloatArray:
+    """`np.stack(parts, axis=-1)` of arrays that share one shape."""
+    out = np.empty((*np.shape(parts[0]), len(parts)))
+    for i, part in enumerate(parts):
+        out[..., i] = part
+    return out
+
+
+def _length(v: FloatArray) -> FloatArray:
+    """Euclidean length over the last axis, kept as [..., 1] (what np.linalg.norm computes, without its overhead)."""
+    return np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=True))
+
+
 def normalize(q: ArrayLike) -> FloatArray:
     q = np.asarray(q, dtype=np.float64)
-    return q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), _EPS)
+    return q / np.maximum(_length(q), _EPS)
 
 
 def multiply(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Hamilton product a * b (apply b, then a)."""
-    aw, ax, ay, az = np.moveaxis(np.asarray(a, dtype=np.float64), -1, 0)
-    bw, bx, by, bz = np.moveaxis(np.asarray(b, dtype=np.float64), -1, 0)
-    return np.stack(
-        (
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ),
-        axis=-1,
+    aw, ax, ay, az = _components(np.asarray(a, dtype=np.float64))
+    bw, bx, by, bz = _components(np.asarray(b, dtype=np.float64))
+    return _stacked(
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
     )
 
 
@@ -51,15 +70,12 @@ def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:
 
 def to_matrix(q: ArrayLike) -> FloatArray:
     """Rotation matrices [..., 3, 3] of q [..., 4], normalized first: body to world coordinates."""
-    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
-    return np.stack(
-        (
-            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
-            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
-            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
-        ),
-        axis=-2,
-    )
+    w, x, y, z = _components(normalize(q))
+    m = np.empty((*w.shape, 3, 3))
+    m[..., 0, 0], m[..., 0, 1], m[..., 0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+    m[..., 1, 0], m[..., 1, 1], m[..., 1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+    m[..., 2, 0], m[..., 2, 1], m[..., 2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+    return m
 
 
 def log(q: ArrayLike) -> FloatArray:
@@ -67,7 +83,7 @@ def log(q: ArrayLike) -> FloatArray:
     q = normalize(q)
     q = np.where(q[..., :1] < 0, -q, q)
     vec = q[..., 1:]
-    sin_half = np.linalg.norm(vec, axis=-1, keepdims=True)
+    sin_half = _length(vec)
     angle = 2 * np.arctan2(sin_half, q[..., :1])
     scale = np.where(sin_half > 1e-9, angle / np.maximum(sin_half, _EPS), 2.0)
     return vec * scale
@@ -76,7 +92,7 @@ def log(q: ArrayLike) -> FloatArray:
 def exp(rotvec: ArrayLike) -> FloatArray:
     """Unit quaternion [..., 4] of a rotation vector [..., 3]."""
     rotvec = np.asarray(rotvec, dtype=np.float64)
-    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    angle = _length(rotvec)
     scale = np.where(angle > 1e-9, np.sin(angle / 2) / np.maximum(angle, _EPS), 0.5)
     return np.concatenate((np.cos(angle / 2), rotvec * scale), axis=-1)
 
@@ -89,14 +105,15 @@ def from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> FloatArray:
 def from_yaw(yaw: ArrayLike) -> FloatArray:
     """Rotation [..., 4] by `yaw` [...] (rad) about the world z axis: a heading with no tilt."""
     half = np.asarray(yaw, dtype=np.float64) / 2
-    zero = np.zeros_like(half)
-    return np.stack((np.cos(half), zero, zero, np.sin(half)), axis=-1)
+    out = np.zeros((*half.shape, 4))
+    out[..., 0], out[..., 3] = np.cos(half), np.sin(half)
+    return out
 
 
 def angle(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Geodesic angle (rad, in [0, pi]) between the rotations a and b (accurate near 0, unlike arccos of the dot)."""
     rel = multiply(conjugate(normalize(a)), normalize(b))
-    return 2 * np.arctan2(np.linalg.norm(rel[..., 1:], axis=-1), np.abs(rel[..., 0]))
+    return 2 * np.arctan2(_length(rel[..., 1:])[..., 0], np.abs(rel[..., 0]))
 
 
 def slerp(a: ArrayLike, b: ArrayLike, t: ArrayLike) -> FloatArray:
@@ -117,15 +134,19 @@ def slerp(a: ArrayLike, b: ArrayLike, t: ArrayLike) -> FloatArray:
 
 def continuous(q: ArrayLike, axis: int = -2) -> FloatArray:
     """Flip signs along `axis` (time) so that consecutive quaternions have a non-negative dot product."""
-    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0)
-    flips = np.sum(q[1:] * q[:-1], axis=-1, keepdims=True) < 0  # a flip at i changes the sign of every later frame
-    sign = np.concatenate((np.ones_like(flips[:1], dtype=np.float64), np.where(np.cumsum(flips, axis=0) % 2 == 1, -1.0, 1.0)))
-    return np.moveaxis(q * sign, 0, axis)
+    q = np.asarray(q, dtype=np.float64)
+    time_axis = axis % q.ndim
+    if time_axis != q.ndim - 2:
+        return np.moveaxis(continuous(np.moveaxis(q, time_axis, -2)), -2, time_axis)
+    flips = np.add.reduce(q[..., 1:, :] * q[..., :-1, :], axis=-1, keepdims=True) < 0  # a flip at i changes every later frame
+    sign = np.ones((*q.shape[:-1], 1))
+    sign[..., 1:, :] = np.where(np.cumsum(flips, axis=-2) % 2 == 1, -1.0, 1.0)
+    return q * sign
 
 
 def heading(q: ArrayLike) -> FloatArray:
     """Yaw (rad, in (-pi, pi]) of the body x axis projected on the ground plane."""
-    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    w, x, y, z = _components(np.asarray(q, dtype=np.float64))
     return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
@@ -142,10 +163,10 @@ def wrapped(a: float) -> float:
 
 def rpy(q: ArrayLike) -> FloatArray:
     """Roll, pitch, yaw (rad) [..., 3] of q [..., 4], the z-y-x Euler angles (q = yaw * pitch * roll); pitch in [-pi/2, pi/2]."""
-    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    w, x, y, z = _components(np.asarray(q, dtype=np.float64))
     roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
-    return np.stack((roll, pitch, heading(q)), axis=-1)
+    return _stacked(roll, pitch, heading(q))
 
 
 def wrap_angle(a: ArrayLike) -> FloatArray:

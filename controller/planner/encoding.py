@@ -41,6 +41,10 @@ GROUPS: tuple[tuple[str, list[int]], ...] = (
     ("waist", _joint_channels(g1.WAIST_JOINTS)),
     ("arms", _joint_channels(g1.ARM_JOINTS)),
 )
+_GROUP_MEMBERS = np.zeros((ft.NUM_CHANNELS, len(GROUPS)))  # [C, G]: 1 where channel c is in group g
+for _g, (_, _channels) in enumerate(GROUPS):
+    _GROUP_MEMBERS[_channels, _g] = 1.0
+_GROUP_SIZES = _GROUP_MEMBERS.sum(axis=0)
 # Joint-vector slices for the random partial keyframes of training.
 _LEGS, _UPPER_BODY, _ARMS = (g1.joint_slice(group) for group in (g1.LEG_JOINTS, g1.UPPER_BODY_JOINTS, g1.ARM_JOINTS))
 _ONE_ARM = (g1.joint_slice(g1.LEFT_ARM_JOINTS), g1.joint_slice(g1.RIGHT_ARM_JOINTS))
@@ -72,7 +76,7 @@ def conditioning(
     gets a zero slot and flag 0.
     """
     batch = context.shape[:-2]
-    groups = np.stack([mask[..., idx].mean(axis=-1) for _, idx in GROUPS], axis=-1)  # [..., F, G]
+    groups = (mask @ _GROUP_MEMBERS) / _GROUP_SIZES  # [..., F, G]: the share of each group's channels constrained
     one_hot = (np.asarray(length)[..., None] == np.array(ALLOWED_LENGTHS)).astype(np.float64)
     if text is None:
         text_part = np.zeros((*batch, TEXT_EMBEDDING_DIM + 1))

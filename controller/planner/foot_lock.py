@@ -51,17 +51,24 @@ MOVING_FOOT_MPS = 0.3
 @dataclass(frozen=True)
 class LegChains:
     """Both legs from the pelvis, stacked [2, ...]: link offsets [2, 6, 3], fixed link rotations [2, 6, 3, 3],
-    joint axes [2, 6, 3] with their cross-product matrices, and the sole point [2, 3] in the last link."""
+    joint axes [2, 6, 3], and the sole point [2, 3] in the last link."""
 
     offsets: FloatArray
     rotations: FloatArray
     axes: FloatArray
     sole: FloatArray
-    _skews: tuple[FloatArray, FloatArray] = field(init=False, repr=False, compare=False)
+    _turn_terms: tuple[FloatArray, FloatArray, FloatArray] = field(init=False, repr=False, compare=False)
+    _offsets_and_axes: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        skew = _skew(self.axes)  # K and K @ K of every joint axis, for Rodrigues' formula
-        object.__setattr__(self, "_skews", (skew, skew @ skew))
+        # A link's fixed rotation F times its joint's turn by q about axis a (Rodrigues: I + sin q K + (1 - cos q) K K, K
+        # the cross-product matrix of a) is F + sin q FK + (1 - cos q) FKK: one product a joint in `forward`, not two.
+        skew = _skew(self.axes)
+        fk = self.rotations @ skew
+        object.__setattr__(self, "_turn_terms", (self.rotations, fk, fk @ skew))
+        # Each link's offset and its joint's axis in the parent link, side by side [2, 6, 3, 2]: one product a joint.
+        in_parent = (self.rotations @ self.axes[..., None])[..., 0]
+        object.__setattr__(self, "_offsets_and_axes", np.stack((self.offsets, in_parent), axis=-1))
 
     @classmethod
     def from_spec(cls, legs: list[dict[str, Any]]) -> LegChains:
@@ -72,30 +79,28 @@ class LegChains:
 
     def forward(self, root_pos: FloatArray, root_rot: FloatArray, q: FloatArray, leg: NDArray[np.intp]) -> tuple[FloatArray, ...]:
         """Sole points [K, 3], joint positions [K, 6, 3] and world joint axes [K, 6, 3] of legs `leg` [K] at angles q [K, 6]."""
-        offsets, fixed, axes = self.offsets[leg], self.rotations[leg], self.axes[leg]
-        skew, skew2 = (k[leg] for k in self._skews)
+        fixed, fk, fkk = (term[leg] for term in self._turn_terms)
         sin, cos = np.sin(q)[..., None, None], np.cos(q)[..., None, None]
-        turns = np.eye(3) + sin * skew + (1.0 - cos) * skew2  # Rodrigues, [K, 6, 3, 3]
+        links = fixed + sin * fk + (1.0 - cos) * fkk  # [K, 6, 3, 3]: each link's rotation from its parent, at its angle
+        offsets_and_axes = self._offsets_and_axes[leg]
         position, rotation = root_pos, root_rot
-        joints, world_axes = [], []
+        joints, world_axes = np.empty((len(leg), 6, 3)), np.empty((len(leg), 6, 3))
         for i in range(6):
-            position = position + (rotation @ offsets[:, i, :, None])[..., 0]
-            rotation = rotation @ fixed[:, i]
-            world_axes.append((rotation @ axes[:, i, :, None])[..., 0])
-            joints.append(position)
-            rotation = rotation @ turns[:, i]
+            moved = rotation @ offsets_and_axes[:, i]  # [K, 3, 2]: the offset to joint i and its axis, in the world
+            position = position + moved[..., 0]
+            joints[:, i], world_axes[:, i] = position, moved[..., 1]
+            rotation = rotation @ links[:, i]
         sole = position + (rotation @ self.sole[leg][..., None])[..., 0]
-        return sole, np.stack(joints, axis=1), np.stack(world_axes, axis=1)
+        return sole, joints, world_axes
 
 
 def sole_points(legs: LegChains, frames: FloatArray) -> FloatArray:
     """Both soles' world points [T, 2, 3] (left, right) of frames [T, 36]."""
     count = len(frames)
-    both = np.tile(np.array([0, 1]), count)
     root_pos = np.repeat(frames[:, _POS], 2, axis=0)
     root_rot = np.repeat(quat.to_matrix(frames[:, _ROT]), 2, axis=0)
     q = frames[:, _LEGS_IN_QPOS].reshape(count * 2, 6)
-    return legs.forward(root_pos, root_rot, q, both)[0].reshape(count, 2, 3)
+    return legs.forward(root_pos, root_rot, q, _alternate_legs(count * 2))[0].reshape(count, 2, 3)
 
 
 def lock_feet(
@@ -106,14 +111,13 @@ def lock_feet(
     frames whose leg joints a keyframe constrains, `fps` the plan's frame rate. With `context_before` [36], the frame
     before `context_last`, a run from the first frame whose foot was moving at the context's end is left as planned."""
     seeds, frames = qpos.shape[:2]
-    both = np.array([0, 1])
-    root_rot = quat.to_matrix(qpos[..., _ROT])  # [S, N, 3, 3]
     # Every frame's soles and the context's last frame's in one pass: rows (seed, frame, leg), then the context's two legs.
-    rows_q = np.concatenate((qpos[..., _LEGS_IN_QPOS].reshape(-1, 6), context_last[_LEGS_IN_QPOS].reshape(2, 6)))
-    rows_pos = np.repeat(np.concatenate((qpos[..., _POS].reshape(-1, 3), context_last[None, _POS])), 2, axis=0)
-    rows_rot = np.repeat(np.concatenate((root_rot.reshape(-1, 3, 3), quat.to_matrix(context_last[None, _ROT]))), 2, axis=0)
-    rows_leg = np.tile(both, seeds * frames + 1)
-    soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, rows_leg)
+    poses = np.concatenate((qpos.reshape(-1, qpos.shape[-1]), context_last[None]))
+    rotations = quat.to_matrix(poses[:, _ROT])
+    root_rot = rotations[:-1].reshape(seeds, frames, 3, 3)
+    rows_q = poses[:, _LEGS_IN_QPOS].reshape(-1, 6)
+    rows_pos, rows_rot = np.repeat(poses[:, _POS], 2, axis=0), np.repeat(rotations, 2, axis=0)
+    soles, all_joints, all_axes = legs.forward(rows_pos, rows_rot, rows_q, _alternate_legs(len(rows_q)))
     sole, context_sole = soles[:-2].reshape(seeds, frames, 2, 3), soles[-2:]
     leaving = np.zeros(2, dtype=bool)  # a foot that was moving as the context ended: a run from frame 0 is a step
     if context_before is not None:
@@ -154,7 +158,7 @@ def lock_feet(
     for iteration in range(ITERATIONS):
         if iteration:
             current, joint_pos, axes = legs.forward(base_pos, base_rot, q, leg_idx)
-        jacobian = np.cross(axes, current[:, None, :] - joint_pos).transpose(0, 2, 1)  # [K, 3, 6]
+        jacobian = _cross(axes, current[:, None, :] - joint_pos).transpose(0, 2, 1)  # [K, 3, 6]
         gram = jacobian @ jacobian.transpose(0, 2, 1) + DAMPING**2 * np.eye(3)
         step = np.linalg.solve(gram, (goal - current)[..., None])  # [K, 3, 1]
         q = q + (jacobian.transpose(0, 2, 1) @ step)[..., 0]
@@ -176,6 +180,20 @@ def _fade(contacts: BoolArray) -> FloatArray:
     following = np.minimum.accumulate(np.where(contacts, t, 2 * far)[:, ::-1], axis=1)[:, ::-1]  # the next one at or after t
     distance = np.minimum(t - last, following - t)
     return np.clip(1.0 - distance / (FADE_FRAMES + 1), 0.0, 1.0)
+
+
+def _alternate_legs(rows: int) -> NDArray[np.intp]:
+    """0, 1, 0, 1, ...: the left and the right leg of each frame."""
+    return np.arange(rows) % 2
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """a x b over the last axis of same-shape arrays (np.cross costs more than the arithmetic on a plan's few rows)."""
+    out = np.empty(a.shape)
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _skew(v: FloatArray) -> FloatArray:

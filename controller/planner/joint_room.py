@@ -24,4 +24,4 @@ def within_room(base: FloatArray, correction: FloatArray, lower: FloatArray, upp
     open_room = room > 0
     safe = np.where(open_room, room, 1.0)
     out = base + np.where(open_room, safe * np.tanh(correction / safe), 0.0)
-    return np.clip(out, np.minimum(base, lower), np.maximum(base, upper))  # the last bit of rounding only
+    return np.minimum(np.maximum(out, np.minimum(base, lower)), np.maximum(base, upper))  # the last bit of rounding only
