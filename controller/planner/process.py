@@ -8,7 +8,15 @@ step took 2.5-6.5 ms at p99 instead of 0.6, a plan 4.0-6.7 ms at the median (3.5
 and its thread waited up to 2.7 ms to start one (docs/planner.md, "Latency on the wall clock").
 Here the plan shares no lock with the loop. `submit` sends a request from the caller's thread (the
 control tick: pickling a request takes tens of microseconds), so no thread has to be handed the lock
-to start a plan; a reader thread, blocked on the pipe without the lock, takes the replies in.
+to start a plan; a reader thread, blocked on the pipe without the lock, takes the replies in. A reply that arrives
+while the tick runs Python still waits for the lock, up to the switch interval: the run holds it at
+`REPLY_SWITCH_INTERVAL_S` (1 ms, not 5) while this process plans for it. On `walk_turn_stop` paced to the wall clock
+that took a reply's wait for the lock from 2.4 ms to 0.6 ms at p99 (docs/planner.md).
+
+With `cpu`, the child runs on that CPU alone. Left to itself the kernel wakes a process next to the one that woke it:
+the child onto the CPU where the tick that sent the request still runs, where it waits or migrates with cold caches.
+Measured on a 2-CPU machine (walk_turn_stop on the wall clock): a plan's compute p99 6.0-7.5 ms pinned against 7.4-8.5
+with 2-3 ms stalls left to the kernel (docs/planner.md). `planner_cpu` picks one.
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ import collections
 import contextlib
 import logging
 import multiprocessing
+import os
 import signal
 import threading
 from concurrent.futures import Future
@@ -30,23 +39,32 @@ log = logging.getLogger(__name__)
 
 START_TIMEOUT_S = 60.0  # loading onnxruntime and the model in a fresh interpreter: about a second here
 STOP_TIMEOUT_S = 2.0
+REPLY_SWITCH_INTERVAL_S = 0.001  # sys.setswitchinterval for a loop that takes replies: a reply waits at most this for the lock
 
 
 class PlannerProcessError(G1Error, RuntimeError):
     """The planner process is gone, or answered with something that is not a plan."""
 
 
+def planner_cpu(allowed: set[int], control_cpu: int | None) -> int | None:
+    """The CPU for the planner process: the highest of `allowed` that is not the control loop's; None with fewer than two."""
+    others = allowed - {control_cpu}
+    return max(others) if len(allowed) > 1 and others else None
+
+
 class PlannerProcess:
-    """`Planner.load(model_dir, threads)` run in a child process, warmed up; `submit` or `plan` ask it for plans.
+    """`Planner.load(model_dir, threads)` run in a child process, warmed up (on `cpu` alone, when given); `submit` or
+    `plan` ask it for plans.
 
     The child answers in the order asked, one plan at a time: a stalled plan holds the next ones up. Usable with `with`;
     `close` is safe twice.
     """
 
-    def __init__(self, model_dir: Path | None = None, threads: int = 1) -> None:
+    def __init__(self, model_dir: Path | None = None, threads: int = 1, cpu: int | None = None) -> None:
         context = multiprocessing.get_context("spawn")  # no fork of a process that already runs threads
         self._conn, child = context.Pipe()
-        self._process = context.Process(target=_serve, args=(child, model_dir, threads), name="g1ctl-planner", daemon=True)
+        args = (child, model_dir, threads, cpu)
+        self._process = context.Process(target=_serve, args=args, name="g1ctl-planner", daemon=True)
         self._process.start()
         child.close()
         self._send_lock = threading.Lock()
@@ -134,11 +152,17 @@ class PlannerProcess:
         self.close()
 
 
-def _serve(conn: Connection, model_dir: Path | None, threads: int) -> None:
+def _serve(conn: Connection, model_dir: Path | None, threads: int, cpu: int | None) -> None:
     """The child: load and warm up the planner, then answer requests until asked to end or the parent is gone."""
     from controller.planner.runtime import Planner  # noqa: PLC0415 - onnxruntime in the child only
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle; it then ends the child
+    try:
+        if cpu is not None:
+            os.sched_setaffinity(0, {cpu})
+    except OSError as exc:  # a CPU this process may not use (a container's cpuset): say so, as a load error would
+        conn.send(AssetError(f"the planner process cannot run on CPU {cpu}: {exc}"))
+        return
     try:
         planner = Planner.load(model_dir, threads=threads)
         planner.warm_up()

@@ -15,6 +15,7 @@ do, and the video, picture and viewer when asked for.
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import time
 from contextlib import ExitStack
@@ -26,6 +27,7 @@ from tqdm import tqdm
 from controller.assets import ensure_assets
 from controller.estimation.step import load_compiled
 from controller.inputs.registry import open_input
+from controller.planner.process import planner_cpu
 from controller.reports import write_report
 from controller.runtime.backend_registry import BuiltBackend
 from controller.runtime.estimation import attach_estimator
@@ -116,6 +118,7 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
     by `stack`."""
     assets = ensure_assets(plan.assets_dir)
     tracker = make_tracker(plan.tracker, TrackerSpec(plan.policy, assets, g1.JOINT_NAMES))
+    cpus = os.sched_getaffinity(0)  # before the loop may be pinned to one of them
     scheduling = request_realtime(plan.rt_priority, plan.cpu)  # before the robot side starts its threads: they inherit it
     if plan.estimator:
         load_compiled()  # the estimator's compiled step, before a robot that runs on its own is started (seconds on a first run)
@@ -140,7 +143,7 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
     total = round(plan.duration * tracker.rate_hz) if plan.duration else None
     desc = f"{plan.backend.name} {plan.scenario_name if plan.input == 'scripted' else plan.input}"
     bar = stack.enter_context(tqdm(total=total, unit="tick", disable=not outputs.progress, desc=desc, file=sys.stderr))
-    reference = _reference(plan, side, tracker.command_limits, stack, hooks)
+    reference = _reference(plan, side, tracker.command_limits, stack, hooks, planner_cpu(cpus, plan.cpu))
     session = Session(backend, tracker, source, reference, attach_estimator(backend, plan), outputs.record)
     stack.callback(session.close)
     ghost = None
@@ -157,9 +160,10 @@ def build(plan: RunPlan, stack: ExitStack, hooks: RunHooks | None = None) -> Bui
 
 
 def _reference(
-    plan: RunPlan, side: BuiltBackend, limits: CommandLimits, stack: ExitStack, hooks: RunHooks | None
+    plan: RunPlan, side: BuiltBackend, limits: CommandLimits, stack: ExitStack, hooks: RunHooks | None, cpu: int | None
 ) -> ReferenceSource | None:
-    """The scenario's waypoints, the planner in the loop (a job's reference over it), or None: the command alone."""
+    """The scenario's waypoints, the planner in the loop (a job's reference over it), or None: the command alone. On the
+    wall clock the planner runs in a process of its own, on `cpu` where there is one."""
     from controller.reference.waypoints import WaypointFollower, WaypointReference  # noqa: PLC0415
 
     waypoints = plan.scenario.waypoints if plan.scenario is not None else ()
@@ -169,7 +173,7 @@ def _reference(
     from controller.reference.planned import PlannedReference  # noqa: PLC0415
 
     simulated = plan.clock == "simulated"
-    plan_fn, submit = _planner(simulated, stack)
+    plan_fn, submit = _planner(simulated, stack, cpu)
     planned = PlannedReference(
         plan_fn, simulated_clock=simulated, joint_limits=side.joint_limits, seed=plan.seed, follower=follower, submit=submit
     )
@@ -183,7 +187,9 @@ def _reference(
     return wrapped
 
 
-def _planner(simulated_clock: bool, stack: ExitStack) -> tuple[Callable[[PlanRequest], Plan], Callable[[PlanRequest], Future[Plan]] | None]:
+def _planner(
+    simulated_clock: bool, stack: ExitStack, cpu: int | None
+) -> tuple[Callable[[PlanRequest], Plan], Callable[[PlanRequest], Future[Plan]] | None]:
     """The planner's `plan` warmed up, and its `submit` where it has one: in this process on the simulated clock (the loop
     waits for each plan, nothing competes), in a process of its own on the wall clock, asked from the tick's thread (a plan
     beside the loop would share its interpreter lock, and a worker thread would have to be handed it to start one)."""
@@ -193,9 +199,11 @@ def _planner(simulated_clock: bool, stack: ExitStack) -> tuple[Callable[[PlanReq
         planner = Planner.load()
         planner.warm_up()
         return planner.plan, None
-    from controller.planner.process import PlannerProcess  # noqa: PLC0415
+    from controller.planner.process import REPLY_SWITCH_INTERVAL_S, PlannerProcess  # noqa: PLC0415
 
-    process = stack.enter_context(PlannerProcess())
+    process = stack.enter_context(PlannerProcess(cpu=cpu))
+    stack.callback(sys.setswitchinterval, sys.getswitchinterval())
+    sys.setswitchinterval(REPLY_SWITCH_INTERVAL_S)
     return process.plan, process.submit
 
 

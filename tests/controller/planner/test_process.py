@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.planner.process import PlannerProcess, PlannerProcessError
+from controller.planner.process import PlannerProcess, PlannerProcessError, planner_cpu
 from controller.planner.request import Keyframe, PlanRequest, PlanRequestError, target_root
 from controller.planner.runtime import Planner
 from controller.reference.buffer import ReferenceBuffer
@@ -79,3 +79,24 @@ def test_a_process_that_died_or_was_closed_is_an_error_that_says_so() -> None:
 def test_a_planner_that_cannot_load_is_named(tmp_path: Path) -> None:
     with pytest.raises(AssetError, match=f"no planner model in {tmp_path}"):
         PlannerProcess(model_dir=tmp_path)
+
+
+def test_the_planner_gets_a_cpu_of_its_own_where_there_are_two() -> None:
+    assert planner_cpu({0, 1, 2, 3}, None) == 3
+    assert planner_cpu({0, 1, 2, 3}, 3) == 2  # never the control loop's
+    assert planner_cpu({5}, None) is None and planner_cpu({5}, 5) is None  # one CPU: shared, as the kernel likes
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one CPU: nothing to pin the planner apart from")
+def test_a_planner_process_on_a_cpu_runs_there_alone_and_plans_the_same() -> None:
+    cpu = max(os.sched_getaffinity(0))
+    request = PlanRequest(standing(), (target_root(43, 1.0, 0.3, 0.5),), (44,), seed=3)
+    with PlannerProcess(cpu=cpu) as process:
+        assert os.sched_getaffinity(process._process.pid) == {cpu}
+        np.testing.assert_array_equal(process.plan(request).qpos, Planner.load().plan(request).qpos)
+
+
+def test_a_cpu_the_planner_may_not_use_is_named() -> None:
+    missing = max(os.sched_getaffinity(0)) + 4096
+    with pytest.raises(AssetError, match=f"the planner process cannot run on CPU {missing}: "):
+        PlannerProcess(cpu=missing)

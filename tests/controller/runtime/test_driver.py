@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -21,6 +22,7 @@ import pytest
 import hw.jointmap
 from controller.assets import Assets
 from controller.cli.main import main
+from controller.planner import process as planner_process
 from controller.runtime.backend import Backend
 from controller.runtime.backend_registry import BACKENDS, backend_entry, choose_backend, robot_kind
 from controller.runtime.bus_process import BusProcessBackend
@@ -309,3 +311,28 @@ def test_the_robots_remote_is_read_on_the_domain_the_simulated_robot_took(tmp_pa
     report = json.loads(report_path.read_text())
     assert report["hw"]["domain"] != configured.dds.domain and report["input"] == "unitree-remote"
     assert report["input_losses"] == 0 and report["damp_reason"] == "", report["damp_reason"]
+
+
+def test_a_planner_on_the_wall_clock_plans_in_a_process_on_a_cpu_of_its_own(monkeypatch: pytest.MonkeyPatch) -> None:
+    cpus: list[int | None] = []
+
+    class Recorded(planner_process.PlannerProcess):
+        def __init__(self, cpu: int | None = None) -> None:
+            cpus.append(cpu)
+            super().__init__(cpu=cpu)
+
+    monkeypatch.setattr(planner_process, "PlannerProcess", Recorded)
+    intervals: list[float] = []
+    real_tick = Session.tick
+
+    def tick(self: Session) -> bool:
+        intervals.append(sys.getswitchinterval())
+        return real_tick(self)
+
+    monkeypatch.setattr(Session, "tick", tick)
+    before = sys.getswitchinterval()
+    report = run(RunConfig(planner=True, realtime=True, duration=1.0))
+    assert report["replans"] >= 8 and report["planner_failures"] == 0 and report["late_plans"] == 0
+    assert cpus == [planner_process.planner_cpu(os.sched_getaffinity(0), None)]
+    # replies get the interpreter lock within 1 ms while the run lasts; the setting ends with it
+    assert set(intervals) == {planner_process.REPLY_SWITCH_INTERVAL_S} and sys.getswitchinterval() == before
