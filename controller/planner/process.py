@@ -15,8 +15,8 @@ that took a reply's wait for the lock from 2.4 ms to 0.6 ms at p99 (docs/planner
 
 With `cpu`, the child runs on that CPU alone. Left to itself the kernel wakes a process next to the one that woke it:
 the child onto the CPU where the tick that sent the request still runs, where it waits or migrates with cold caches.
-Measured on a 2-CPU machine (walk_turn_stop on the wall clock): a plan's compute p99 6.0-7.5 ms pinned against 7.4-8.5
-with 2-3 ms stalls left to the kernel (docs/planner.md). `planner_cpu` picks one.
+Measured on a 2-CPU machine (walk_turn_stop on the wall clock): the foot lock's p99 1.3-1.5 ms pinned, 2.4-3.9 ms left
+to the kernel, whose stalls of 2-3 ms hit any part of a plan (docs/planner.md). `planner_cpu` picks the CPU.
 """
 
 from __future__ import annotations
