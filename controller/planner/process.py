@@ -48,8 +48,7 @@ class PlannerProcessError(G1Error, RuntimeError):
 
 def planner_cpu(allowed: set[int], control_cpu: int | None) -> int | None:
     """The CPU for the planner process: the highest of `allowed` that is not the control loop's; None with fewer than two."""
-    others = allowed - {control_cpu}
-    return max(others) if len(allowed) > 1 and others else None
+    return max(allowed - {control_cpu}) if len(allowed) > 1 else None
 
 
 class PlannerProcess:
